@@ -1,0 +1,3 @@
+from visemeface.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,65 @@
+"""The ``visemeface`` command line: a thin layer that parses and dispatches.
+
+Each sub-command lives in its own module under :mod:`visemeface.commands`
+and exposes ``register(subparsers)``, which adds its parser and sets
+``func=run`` where ``run(args) -> int``. Modules are discovered, so adding a
+command touches no shared file. ``ORDER`` (an int) sorts them in ``--help``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import pkgutil
+import sys
+import warnings
+
+from visemeface import __version__, commands
+from visemeface.errors import VisemefaceError
+
+
+def _command_modules():
+    mods = []
+    for info in pkgutil.iter_modules(commands.__path__):
+        if info.name.startswith("_"):
+            continue
+        mods.append(importlib.import_module(f"visemeface.commands.{info.name}"))
+    return sorted(mods, key=lambda m: (getattr(m, "ORDER", 100), m.__name__))
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="visemeface",
+        description="Expressive visual-speech synthesis: Waters muscle functions, visemes and emotions, "
+        "coarticulated speech animation and a physically-based sticky-lip face.",
+    )
+    parser.add_argument("--version", action="version", version=f"visemeface {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for mod in _command_modules():
+        mod.register(sub)
+    return parser
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None):
+    print(f"visemeface: warning: {message}", file=sys.stderr)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 0
+    warnings.showwarning = _show_warning
+    try:
+        return int(args.func(args) or 0)
+    except VisemefaceError as exc:
+        print(f"visemeface: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("visemeface: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

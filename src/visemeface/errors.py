@@ -1,0 +1,45 @@
+"""The project's own error types.
+
+Every error a user can cause (bad file, bad value, existing output) is an
+:class:`InputError`; the CLI prints its message on one line and exits with
+status 2. Messages name the file, line and value that were wrong.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable
+from pathlib import Path
+
+
+class VisemefaceError(Exception):
+    """Base class of all errors raised on purpose by visemeface."""
+
+
+class InputError(VisemefaceError, ValueError):
+    """Bad user input: a file, an option or a value. CLI exit status 2.
+
+    Parameters
+    ----------
+    message : str
+        What was wrong.
+    path : str or Path, optional
+        The file concerned; prefixed to the message.
+    line : int, optional
+        1-based line number in ``path``.
+    """
+
+    def __init__(self, message: str, path: str | Path | None = None, line: int | None = None):
+        self.path = None if path is None else str(path)
+        self.line = line
+        self.reason = message
+        where = ""
+        if self.path is not None:
+            where = self.path + (f":{line}" if line is not None else "") + ": "
+        super().__init__(where + message)
+
+
+def close_matches(name: str, known: Iterable[str], n: int = 3) -> str:
+    """Return a hint like ``" (did you mean: a, b?)"`` or ``""``."""
+    matches = difflib.get_close_matches(name, list(known), n=n, cutoff=0.5)
+    return f" (did you mean: {', '.join(matches)}?)" if matches else ""

@@ -1,0 +1,1 @@
+"""visemeface.speech"""

@@ -1,0 +1,26 @@
+import subprocess
+import sys
+
+import pytest
+
+from visemeface import __version__
+from visemeface.cli import main
+
+
+def test_version(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0
+    assert __version__ in capsys.readouterr().out
+
+
+def test_help_lists_commands(capsys):
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    out = capsys.readouterr().out
+    assert "usage: visemeface" in out
+
+
+def test_console_entry_point_runs():
+    proc = subprocess.run([sys.executable, "-m", "visemeface", "--version"], capture_output=True, text=True)
+    assert proc.returncode == 0 and __version__ in proc.stdout

@@ -1,0 +1,41 @@
+import pytest
+
+from visemeface.errors import InputError
+from visemeface.outputs import atomic_dir, atomic_output
+
+
+def test_atomic_output_refuses_existing(tmp_path):
+    target = tmp_path / "a.txt"
+    target.write_text("user data")
+    with pytest.raises(InputError, match="--force"):
+        with atomic_output(target):
+            pass
+    assert target.read_text() == "user data"
+
+
+def test_atomic_output_leaves_nothing_on_error(tmp_path):
+    target = tmp_path / "a.txt"
+    with pytest.raises(RuntimeError):
+        with atomic_output(target) as tmp:
+            tmp.write_text("half")
+            raise RuntimeError("boom")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_atomic_output_force_replaces(tmp_path):
+    target = tmp_path / "a.txt"
+    target.write_text("old")
+    with atomic_output(target, force=True) as tmp:
+        tmp.write_text("new")
+    assert target.read_text() == "new"
+    assert [p.name for p in tmp_path.iterdir()] == ["a.txt"]
+
+
+def test_atomic_dir(tmp_path):
+    target = tmp_path / "frames"
+    with atomic_dir(target) as tmp:
+        (tmp / "0001.png").write_bytes(b"x")
+    assert (target / "0001.png").exists()
+    with pytest.raises(InputError):
+        with atomic_dir(target):
+            pass
