@@ -1,0 +1,270 @@
+"""Waters muscle functions: pure numpy displacement fields on vertex arrays.
+
+Every function takes rest positions ``points`` (N, 3) in metres and returns a
+displacement (N, 3) for activation 1; displacements of the linear and sphincter
+muscles are linear in the activation (seed 002 §2.1, Waters 1987), so a rig can
+precompute them once as basis fields. The jaw is a rotation, nonlinear in its
+angle, and is evaluated on demand from :func:`jaw_rotation_displacement`.
+
+Axes follow ``docs/conventions.md``: +x subject's left, +y up, +z forward.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "smoothstep",
+    "linear_muscle_displacement",
+    "linear_muscle_falloff",
+    "sphincter_displacement",
+    "seam_height",
+    "lip_trim_weights",
+    "jaw_centre_weight",
+    "jaw_rotation_displacement",
+]
+
+
+def smoothstep(edge0: float, edge1: float, x: np.ndarray) -> np.ndarray:
+    r"""Hermite step, 0 below ``edge0``, 1 above ``edge1``, C1 in between.
+
+    .. math:: t = \mathrm{clip}\left(\frac{x - e_0}{e_1 - e_0}, 0, 1\right),\quad s = t^2 (3 - 2t)
+    """
+    t = np.clip((np.asarray(x, dtype=float) - edge0) / (edge1 - edge0), 0.0, 1.0)
+    return t * t * (3.0 - 2.0 * t)
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    v = np.asarray(v, dtype=float)
+    n = np.linalg.norm(v)
+    if not np.isfinite(n) or n == 0.0:
+        raise ValueError(f"cannot normalise vector {v!r}")
+    return v / n
+
+
+def linear_muscle_falloff(points: np.ndarray, attachment, insertion, zone_angle: float,
+                          falloff_start: float, falloff_end: float) -> np.ndarray:
+    r"""Scalar influence (N,) of a Waters linear muscle, in [0, 1].
+
+    With :math:`\mathbf v = \mathbf p - A`, :math:`D = |\mathbf v|` and
+    :math:`\alpha = \angle(\mathbf v, I - A)`, a vertex is inside the zone when
+    :math:`\alpha \le \Omega` and :math:`D \le R_f`. There
+
+    .. math::
+        a(\alpha) = \cos\left(\frac{\alpha}{\Omega}\frac{\pi}{2}\right),\qquad
+        r(D) = \begin{cases}
+            \cos\left((1 - D/R_s)\,\pi/2\right) & D < R_s \\
+            \cos\left(\frac{D - R_s}{R_f - R_s}\,\pi/2\right) & R_s \le D \le R_f
+        \end{cases}
+
+    and the influence is :math:`a\,r`; it is 0 outside the zone. Both factors
+    vanish at the zone edge (:math:`\alpha = \Omega`, :math:`D = R_f`) and at the
+    attachment (:math:`D = 0`); the radial factor peaks at :math:`D = R_s` (put
+    :math:`R_s = |I - A|` for the maximum at the insertion).
+
+    Parameters
+    ----------
+    points : (N, 3) array
+    attachment, insertion : (3,) arrays
+        Bony attachment A and skin insertion I.
+    zone_angle : float
+        Half-angle Ω of the zone of influence (radians, 0 < Ω < π).
+    falloff_start, falloff_end : float
+        Radial distances R_s < R_f from A (metres).
+    """
+    if not 0.0 < zone_angle < np.pi:
+        raise ValueError(f"zone_angle must be in (0, pi), got {zone_angle}")
+    if not 0.0 < falloff_start < falloff_end:
+        raise ValueError(f"need 0 < falloff_start < falloff_end, got {falloff_start}, {falloff_end}")
+    points = np.asarray(points, dtype=float)
+    a = np.asarray(attachment, dtype=float)
+    axis = _unit(np.asarray(insertion, dtype=float) - a)
+    v = points - a
+    dist = np.linalg.norm(v, axis=1)
+    safe = np.where(dist > 0.0, dist, 1.0)
+    cos_alpha = np.clip((v @ axis) / safe, -1.0, 1.0)
+    alpha = np.arccos(cos_alpha)
+    inside = (alpha < zone_angle) & (dist < falloff_end) & (dist > 0.0)
+    angular = np.cos(np.minimum(alpha / zone_angle, 1.0) * np.pi / 2)
+    near = np.cos((1.0 - np.minimum(dist / falloff_start, 1.0)) * np.pi / 2)
+    far = np.cos(np.clip((dist - falloff_start) / (falloff_end - falloff_start), 0.0, 1.0) * np.pi / 2)
+    radial = np.where(dist < falloff_start, near, far)
+    return np.where(inside, np.clip(angular * radial, 0.0, 1.0), 0.0)
+
+
+def linear_muscle_displacement(points: np.ndarray, attachment, insertion, zone_angle: float,
+                               falloff_start: float, falloff_end: float, k: float = 1.0) -> np.ndarray:
+    r"""Displacement (N, 3) of a Waters linear muscle at activation 1.
+
+    .. math:: \Delta\mathbf p = k\, a(\alpha)\, r(D)\, \frac{A - \mathbf p}{D}
+
+    with the angular and radial factors of :func:`linear_muscle_falloff`: skin is
+    pulled toward the bony attachment, most near the insertion, not at all at the
+    edge of the zone or beyond :math:`R_f`. ``k`` is the largest displacement (m).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> p = np.array([[1.0, 0, 0], [0, 1.0, 0], [3.0, 0, 0]])
+    >>> d = linear_muscle_displacement(p, [0, 0, 0], [1, 0, 0], np.pi / 4, 1.0, 2.0, k=0.1)
+    >>> (np.round(d, 6) + 0.0).tolist()
+    [[-0.1, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
+    """
+    points = np.asarray(points, dtype=float)
+    f = linear_muscle_falloff(points, attachment, insertion, zone_angle, falloff_start, falloff_end)
+    v = np.asarray(attachment, dtype=float) - points
+    dist = np.linalg.norm(v, axis=1)
+    unit = v / np.where(dist > 0.0, dist, 1.0)[:, None]
+    return k * f[:, None] * unit
+
+
+def sphincter_displacement(points: np.ndarray, centre, axis_x, axis_y, semi_x: float, semi_y: float,
+                           k: float = 1.0, protrusion: float = 0.0, depth: float | None = None) -> np.ndarray:
+    r"""Displacement (N, 3) of a sphincter (orbicularis oris) at activation 1.
+
+    In the ellipse's frame (centre :math:`c`, in-plane unit axes
+    :math:`\mathbf e_x, \mathbf e_y`, normal :math:`\mathbf n = \mathbf e_x \times \mathbf e_y`)
+    a vertex has local coordinates :math:`(x, y, z)`, elliptic radius
+    :math:`\rho_e = \sqrt{x^2/l_x^2 + y^2/l_y^2}` and in-plane radius
+    :math:`\rho = \sqrt{x^2 + y^2}`. Inside the ellipse (:math:`\rho_e < 1`):
+
+    .. math::
+        d &= \cos^2\left(\rho_e \frac{\pi}{2}\right) \\
+        s &= \max\left(0, 1 - l_y^2/\rho^2\right) \\
+        \Delta\mathbf p &= -k\, d\, s\, \frac{x\mathbf e_x + y\mathbf e_y}{\rho}
+                         + k_p\, (1 - \rho_e^2)^2\, \mathbf n
+
+    The drawstring contraction pulls tissue toward the centre; the shield
+    factor :math:`s` is zero in the central disc of radius :math:`l_y` (the
+    semi-minor axis, seed 002 §2.1.2), so the lips do not collect at the centre
+    but the corners draw in (the mouth narrows). Protrusion along the normal
+    grows toward the centre (puckering). ``depth`` (m), when given, restricts the
+    effect to :math:`|z| \le` depth with a smooth fade, so tissue far behind the
+    lips (inside the mouth) is not pulled.
+
+    Parameters
+    ----------
+    points : (N, 3) array
+    centre, axis_x, axis_y : (3,) arrays
+        Ellipse centre and in-plane directions (``axis_y`` is orthogonalised
+        against ``axis_x``).
+    semi_x, semi_y : float
+        Semi-axes l_x ≥ l_y (m).
+    k, protrusion : float
+        Largest in-plane pull and largest forward push (m).
+    """
+    if not 0.0 < semi_y <= semi_x:
+        raise ValueError(f"need 0 < semi_y <= semi_x, got {semi_x}, {semi_y}")
+    points = np.asarray(points, dtype=float)
+    ex = _unit(axis_x)
+    ey = np.asarray(axis_y, dtype=float)
+    ey = _unit(ey - (ey @ ex) * ex)
+    n = np.cross(ex, ey)
+    rel = points - np.asarray(centre, dtype=float)
+    x, y, z = rel @ ex, rel @ ey, rel @ n
+    rho_e = np.sqrt((x / semi_x) ** 2 + (y / semi_y) ** 2)
+    rho = np.hypot(x, y)
+    inside = rho_e < 1.0
+    d = np.where(inside, np.cos(np.minimum(rho_e, 1.0) * np.pi / 2) ** 2, 0.0)
+    shield = np.where(rho > semi_y, 1.0 - (semi_y / np.where(rho > 0, rho, 1.0)) ** 2, 0.0)
+    pull = k * d * shield / np.where(rho > 0, rho, 1.0)
+    push = np.where(inside, protrusion * (1.0 - np.minimum(rho_e, 1.0) ** 2) ** 2, 0.0)
+    if depth is not None:
+        fade = 1.0 - smoothstep(depth, 2.0 * depth, np.abs(z))
+        pull, push = pull * fade, push * fade
+    return -pull[:, None] * (x[:, None] * ex + y[:, None] * ey) + push[:, None] * n
+
+
+def seam_height(u: np.ndarray, seam_u: np.ndarray, seam_v: np.ndarray, smooth: float = 0.0) -> np.ndarray:
+    r"""Height of the lip-trim surface above each lateral position ``u``.
+
+    The trim surface is the cylinder :math:`v = h(u)` (extruded along the face
+    normal) through the lip-seam points :math:`(u_i, v_i)`: piecewise-linear
+    interpolation, held constant beyond the outermost seam points, optionally
+    smoothed by a Gaussian of width ``smooth`` so the surface has no kinks.
+    """
+    seam_u = np.asarray(seam_u, dtype=float)
+    seam_v = np.asarray(seam_v, dtype=float)
+    order = np.argsort(seam_u, kind="stable")
+    su, sv = seam_u[order], seam_v[order]
+    u = np.asarray(u, dtype=float)
+    if smooth <= 0.0:
+        return np.interp(u, su, sv)
+    # Smooth by sampling the interpolant on a fine grid and convolving with a Gaussian.
+    lo, hi = min(su[0], u.min()) - 4 * smooth, max(su[-1], u.max()) + 4 * smooth
+    grid = np.linspace(lo, hi, 1024)
+    g = np.interp(grid, su, sv)
+    step = grid[1] - grid[0]
+    half = int(np.ceil(4 * smooth / step))
+    kern = np.exp(-0.5 * (np.arange(-half, half + 1) * step / smooth) ** 2)
+    kern /= kern.sum()
+    padded = np.concatenate([np.full(half, g[0]), g, np.full(half, g[-1])])
+    gs = np.convolve(padded, kern, mode="valid")
+    return np.interp(u, grid, gs)
+
+
+def lip_trim_weights(u: np.ndarray, v: np.ndarray, surface_v: np.ndarray, side: np.ndarray,
+                     inner_width: float, outer_width: float, corner_start: float = 0.75,
+                     corner_end: float = 1.15) -> np.ndarray:
+    r"""Weight (N,) in [0, 1] of *upper-lip* muscles; lower-lip muscles use ``1 - w``.
+
+    Positions are in the mouth frame: ``u`` lateral in half mouth widths
+    (corners at :math:`u = \pm 1`), ``v`` vertical (m), ``surface_v`` the trim
+    surface height :math:`h(u)` (:func:`seam_height`). ``side`` is +1 for
+    vertices of the upper lip, -1 for the lower lip, 0 elsewhere: where the two
+    lips' seam vertices coincide geometry alone cannot separate them.
+
+    .. math::
+        c &= \mathrm{smoothstep}(u_0, u_1, |u|) \quad\text{(0 between the lips, 1 past the corners)}\\
+        w_b &= w_i + (w_o - w_i)\,c \\
+        t &= \frac{v - h(u)}{w_b} + \sigma\,(1 - c) \\
+        w &= \mathrm{smoothstep}(-1, 1, t)
+
+    Between the lips the cut is sharp (width :math:`w_i`) and the tag
+    :math:`\sigma` decides the seam vertices, so the lips part. Toward and past
+    the corners, where skin is continuous, the blend widens to :math:`w_o` and
+    the tag fades, so upper and lower muscles share the corner smoothly (no
+    tear, no crease).
+    """
+    u = np.asarray(u, dtype=float)
+    c = smoothstep(corner_start, corner_end, np.abs(u))
+    width = inner_width + (outer_width - inner_width) * c
+    t = (np.asarray(v, dtype=float) - surface_v) / width + np.asarray(side, dtype=float) * (1.0 - c)
+    return smoothstep(-1.0, 1.0, t)
+
+
+def jaw_centre_weight(u: np.ndarray, reach: float) -> np.ndarray:
+    r"""Jaw rotation weight (N,) from the centre line: :math:`\cos^2(\frac{\pi}{2}\min(|u|/U, 1))`.
+
+    1 on the face's centre line (:math:`u = 0`), falling smoothly to 0 at
+    :math:`|u| = U` (``reach``, same units as ``u``), so the open mouth is a
+    smooth curve with the largest drop at the centre of the lower lip
+    (seed 002 §2.1.4).
+    """
+    return np.cos(np.minimum(np.abs(np.asarray(u, dtype=float)) / reach, 1.0) * np.pi / 2) ** 2
+
+
+def jaw_rotation_displacement(points: np.ndarray, joint_left, joint_right, angle: float,
+                              weights: np.ndarray) -> np.ndarray:
+    r"""Displacement (N, 3) rotating each vertex about the jaw axis by ``angle * weights``.
+
+    The axis passes through both jaw joints, direction
+    :math:`\mathbf k = (J_l - J_r)/|J_l - J_r|` (+x on the default face), so a
+    positive angle swings the chin down and back (opens the mouth). With
+    :math:`\mathbf r = \mathbf p - J_r` and per-vertex angle :math:`\theta_i = \theta w_i`
+    (Rodrigues):
+
+    .. math::
+        \Delta\mathbf p = (\cos\theta_i - 1)\,(\mathbf r - (\mathbf k\cdot\mathbf r)\mathbf k)
+                          + \sin\theta_i\,(\mathbf k \times \mathbf r)
+
+    Nonlinear in the angle, so not a basis field: evaluate per pose.
+    """
+    points = np.asarray(points, dtype=float)
+    jr = np.asarray(joint_right, dtype=float)
+    kax = _unit(np.asarray(joint_left, dtype=float) - jr)
+    r = points - jr
+    perp = r - np.outer(r @ kax, kax)
+    cross = np.cross(kax, r)
+    theta = angle * np.asarray(weights, dtype=float)
+    return (np.cos(theta) - 1.0)[:, None] * perp + np.sin(theta)[:, None] * cross

@@ -1,0 +1,178 @@
+"""Properties of the pure muscle functions on synthetic grids."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from visemeface.muscles import functions as mf
+
+
+def grid(n=41, half=0.05, z=0.0):
+    xs = np.linspace(-half, half, n)
+    X, Y = np.meshgrid(xs, xs)
+    return np.column_stack([X.ravel(), Y.ravel(), np.full(X.size, z)])
+
+
+A = np.array([0.0, 0.0, 0.0])
+I = np.array([0.03, 0.0, 0.0])
+OMEGA = np.radians(30)
+RS, RF = 0.03, 0.045
+
+
+def test_linear_zero_outside_zone():
+    p = grid()
+    d = mf.linear_muscle_displacement(p, A, I, OMEGA, RS, RF, k=0.01)
+    v = p - A
+    dist = np.linalg.norm(v, axis=1)
+    alpha = np.arccos(np.clip(v[:, 0] / np.where(dist > 0, dist, 1), -1, 1))
+    outside = (alpha >= OMEGA) | (dist >= RF)
+    assert np.all(d[outside] == 0.0)
+    assert np.abs(d[~outside]).max() > 0
+
+
+def test_linear_known_values_and_direction():
+    # On the axis: angular factor 1, so the magnitude is k * radial(D).
+    D = np.array([0.0075, 0.015, 0.03, 0.0375, 0.045])
+    p = np.column_stack([D, np.zeros(5), np.zeros(5)])
+    d = mf.linear_muscle_displacement(p, A, I, OMEGA, RS, RF, k=0.01)
+    expect = 0.01 * np.array([np.cos(0.75 * np.pi / 2), np.cos(0.5 * np.pi / 2), 1.0,
+                              np.cos(0.5 * np.pi / 2), 0.0])
+    np.testing.assert_allclose(-d[:, 0], expect, atol=1e-15)
+    np.testing.assert_allclose(d[:, 1:], 0.0)
+    # Off axis at the insertion distance: angular factor cos(alpha/Omega * pi/2).
+    alpha = np.radians(15)
+    q = RS * np.array([[np.cos(alpha), np.sin(alpha), 0.0]])
+    dq = mf.linear_muscle_displacement(q, A, I, OMEGA, RS, RF, k=0.01)
+    np.testing.assert_allclose(np.linalg.norm(dq), 0.01 * np.cos(0.5 * np.pi / 2), rtol=1e-12)
+    # Pulled toward the attachment.
+    np.testing.assert_allclose(dq[0] / np.linalg.norm(dq[0]), -q[0] / np.linalg.norm(q[0]), atol=1e-12)
+
+
+def test_linear_maximum_at_insertion_and_monotone_falloff():
+    D = np.linspace(1e-4, RF, 400)
+    p = np.column_stack([D, np.zeros_like(D), np.zeros_like(D)])
+    m = np.linalg.norm(mf.linear_muscle_displacement(p, A, I, OMEGA, RS, RF), axis=1)
+    i = np.argmax(m)
+    assert abs(D[i] - RS) < 2 * (D[1] - D[0])
+    assert np.all(np.diff(m[D < RS]) >= 0)
+    assert np.all(np.diff(m[D > RS]) <= 0)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.floats(0.0, 0.99), st.floats(0.01, 0.99), st.floats(0.05, 1.5))
+def test_linear_angular_falloff_monotone(frac_d, frac_a, omega):
+    # For a fixed distance, influence falls as the angle grows toward the zone edge.
+    D = RS * 0.5 + frac_d * (RF - RS * 0.5)
+    a1, a2 = frac_a * omega, min(frac_a * omega + 0.05, omega)
+    p = D * np.array([[np.cos(a1), np.sin(a1), 0], [np.cos(a2), np.sin(a2), 0]])
+    f = mf.linear_muscle_falloff(p, A, I, omega, RS, RF)
+    assert f[0] >= f[1] - 1e-12
+    assert np.all((f >= 0) & (f <= 1))
+
+
+def test_linear_bad_parameters():
+    with pytest.raises(ValueError):
+        mf.linear_muscle_displacement(grid(3), A, I, 0.0, RS, RF)
+    with pytest.raises(ValueError):
+        mf.linear_muscle_displacement(grid(3), A, I, OMEGA, RF, RS)
+    with pytest.raises(ValueError):
+        mf.linear_muscle_displacement(grid(3), A, A, OMEGA, RS, RF)
+
+
+def sphincter(p, **kw):
+    args = dict(centre=[0, 0, 0], axis_x=[1, 0, 0], axis_y=[0, 1, 0], semi_x=0.04, semi_y=0.02,
+                k=0.005, protrusion=0.004)
+    args.update(kw)
+    return mf.sphincter_displacement(p, **args)
+
+
+def test_sphincter_zone_shield_and_direction():
+    p = grid(61)
+    d = sphincter(p)
+    x, y = p[:, 0], p[:, 1]
+    rho_e = np.sqrt((x / 0.04) ** 2 + (y / 0.02) ** 2)
+    assert np.all(d[rho_e >= 1.0] == 0.0)
+    # Shielded centre disc (radius = semi-minor axis): no in-plane pull there.
+    disc = np.hypot(x, y) <= 0.02
+    assert np.all(d[disc][:, :2] == 0.0)
+    # Elsewhere inside, in-plane pull points at the centre.
+    ring = (~disc) & (rho_e < 0.95)
+    inward = -(d[ring, 0] * x[ring] + d[ring, 1] * y[ring])
+    assert np.all(inward > 0)
+    # Corners at (+-0.025, 0) move toward the centre: the mouth narrows.
+    c = sphincter(np.array([[0.025, 0, 0], [-0.025, 0, 0]]))
+    assert c[0, 0] < 0 < c[1, 0]
+
+
+def test_sphincter_protrusion_grows_toward_centre():
+    x = np.linspace(0, 0.04, 50)
+    p = np.column_stack([x, np.zeros_like(x), np.zeros_like(x)])
+    z = sphincter(p)[:, 2]
+    assert z[0] == pytest.approx(0.004)
+    assert np.all(np.diff(z) <= 0) and z[-1] == 0.0
+
+
+def test_sphincter_depth_fade():
+    p = np.array([[0.03, 0.0, 0.0], [0.03, 0.0, -0.05]])
+    d = sphincter(p, depth=0.01)
+    assert np.linalg.norm(d[0]) > 0 and np.all(d[1] == 0)
+
+
+def test_lip_trim_weights_separate_lips_and_blend_at_corners():
+    u = np.array([0.0, 0.0, 0.0, 0.0, 0.5, 0.5, 3.0])
+    v = np.array([0.0, 0.0, 0.004, -0.004, 0.0, 0.0, 0.0])
+    side = np.array([1, -1, 0, 0, 1, -1, 0])
+    w = mf.lip_trim_weights(u, v, np.zeros_like(u), side, inner_width=0.0005, outer_width=0.01)
+    # Coincident seam vertices are separated by their lip tag.
+    assert w[0] == 1.0 and w[1] == 0.0
+    assert w[2] == 1.0 and w[3] == 0.0
+    assert w[4] == 1.0 and w[5] == 0.0
+    # Far past the corner, on the seam line: shared half and half.
+    assert w[6] == pytest.approx(0.5)
+
+
+def test_lip_trim_weights_smooth_past_corner():
+    # Along a vertical line past the corner, weights change gradually (no crease).
+    v = np.linspace(-0.01, 0.01, 201)
+    w = mf.lip_trim_weights(np.full_like(v, 1.3), v, np.zeros_like(v), np.zeros_like(v), 0.0005, 0.01)
+    assert np.all(np.diff(w) >= 0)
+    assert np.max(np.diff(w)) < 0.02
+    # Along the seam line from the centre outward, the weight of a lip vertex is continuous.
+    u = np.linspace(0, 2, 401)
+    wu = mf.lip_trim_weights(u, np.zeros_like(u), np.zeros_like(u), np.ones_like(u), 0.0005, 0.01)
+    assert np.max(np.abs(np.diff(wu))) < 0.05
+
+
+def test_seam_height_interpolates_and_holds():
+    su = np.array([-1.0, 0.0, 1.0])
+    sv = np.array([0.001, 0.0, 0.001])
+    h = mf.seam_height(np.array([-2.0, -0.5, 0.0, 2.0]), su, sv)
+    np.testing.assert_allclose(h, [0.001, 0.0005, 0.0, 0.001])
+    hs = mf.seam_height(np.linspace(-2, 2, 9), su, sv, smooth=0.1)
+    np.testing.assert_allclose(hs, hs[::-1], atol=1e-12)
+
+
+def test_jaw_rotation_is_rigid_rotation_with_unit_weight():
+    rng = np.random.default_rng(0)
+    p = rng.normal(size=(50, 3)) * 0.05
+    jl, jr = np.array([0.06, 0.01, -0.08]), np.array([-0.06, 0.01, -0.08])
+    d = mf.jaw_rotation_displacement(p, jl, jr, 0.2, np.ones(50))
+    q = p + d
+    # Distances to the axis and positions along it are preserved.
+    k = (jl - jr) / np.linalg.norm(jl - jr)
+    r0, r1 = p - jr, q - jr
+    np.testing.assert_allclose(r0 @ k, r1 @ k, atol=1e-14)
+    np.testing.assert_allclose(np.linalg.norm(r0 - np.outer(r0 @ k, k), axis=1),
+                               np.linalg.norm(r1 - np.outer(r1 @ k, k), axis=1), atol=1e-14)
+    # A chin point in front of and below the axis moves down and back.
+    chin = np.array([[0.0, -0.05, 0.02]])
+    dc = mf.jaw_rotation_displacement(chin, jl, jr, 0.2, np.ones(1))[0]
+    assert dc[1] < 0 and dc[2] < 0
+    # Zero weight: no motion; the displacement scales with the weighted angle.
+    assert np.all(mf.jaw_rotation_displacement(chin, jl, jr, 0.2, np.zeros(1)) == 0)
+
+
+def test_jaw_centre_weight():
+    w = mf.jaw_centre_weight(np.array([0.0, 0.5, 1.0, -1.0, 2.0, 3.0]), reach=2.0)
+    np.testing.assert_allclose(w, [1.0, np.cos(np.pi / 8) ** 2, 0.5, 0.5, 0.0, 0.0], atol=1e-15)
