@@ -1,0 +1,721 @@
+"""Total Lagrangian explicit dynamics (TLED) of hex8 meshes: NiftySim's scheme.
+
+Everything is measured against the rest configuration, so per-element
+constants are computed once (:func:`element_geometry`,
+:func:`hourglass_shape_vectors`) and each step is a fixed sequence of cheap
+element and node loops, run by numba kernels (``parallel=True``, ``prange``,
+no allocation in the loops) or by an equivalent plain-numpy reference.
+
+One step (DESIGN §6; seed 000 §3.2)
+-----------------------------------
+For element e with nodal displacements ``u`` (8 × 3), uniform shape-function
+gradient ``∂h/∂x`` (8 × 3) and rest volume V:
+
+1. deformation gradient ``X = I + uᵀ ∂h/∂x``, ``C = XᵀX``, ``J = det X``;
+2. neo-Hookean ``S = μJ^{-2/3}(I − ⅓ tr C · C⁻¹) + K J (J − 1) C⁻¹``;
+3. element nodal forces ``Fe = V · X S (∂h/∂x)ᵀ`` (the seed's ``8 det J₀ ·
+   X S ∂hᵀ`` with the exact volume) plus hourglass forces ``k γ γᵀ u``;
+4. an optional hook may scale or replace each element's forces (breaking
+   saliva elements, issue 8);
+5. element forces are gathered to nodes through a node → (element, local
+   node) map (race-free) and the central difference with mass-proportional
+   damping α advances every degree of freedom with lumped mass M:
+
+   .. math::
+
+      u^{n+1} = A (R^n - F^n) + B u^n + C u^{n-1},\\quad
+      A = \\left(\\frac{M}{\\Delta t^2} + \\frac{\\alpha M}{2\\Delta t}\\right)^{-1},\\;
+      B = \\frac{2 M A}{\\Delta t^2},\\; C = \\frac{\\alpha M A}{2\\Delta t} - \\frac{B}{2},
+
+   which is ``M ü + α M u̇ + F(u) = R`` with centred differences;
+6. fixed degrees of freedom stay zero, prescribed ones are set to their
+   value at ``t^{n+1}``.
+
+Shape-function gradients are Flanagan & Belytschko's (1981) uniform
+gradients ``∂h/∂x = (1/V) ∫ ∂h/∂x dV`` (exact by 2 × 2 × 2 Gauss), which equal
+the centre values for parallelepipeds and make the patch test exact on
+distorted meshes. Hourglass control (Flanagan–Belytschko, as in NiftySim):
+``γ = Γ − (∂h/∂x)(xᵀ Γ)`` with Γ the 8 × 4 hourglass base vectors and
+``k = κ V (λ + 2μ) Σ(∂h/∂x)² / 8``; ``γ`` is orthogonal to every affine
+field, so hourglass forces vanish for rigid and homogeneous motion.
+
+Stability
+---------
+Flanagan & Belytschko bound an element's highest frequency by
+``ω² ≤ 8 c² Σ(∂h/∂x)²``; the hourglass springs add at most a factor (1 + κ).
+The critical step ``2/ω`` gives each element the characteristic length
+``L = 1 / sqrt(2 (1 + κ) Σ(∂h/∂x)²)`` (h / sqrt(3(1 + κ)) for a cube of edge h)
+and the solver refuses ``dt > min_e L_e / c_e`` with
+``c = sqrt((K + 4μ/3)/ρ)``.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from visemeface.errors import InputError
+from visemeface.physics.hexmesh import NODE_SIGNS, HexMesh
+from visemeface.physics.materials import NeoHookean, material_table
+
+
+def _ensure_numba_cache_dir() -> None:
+    """Point NUMBA_CACHE_DIR at a writable folder when the package is read-only."""
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return
+    here = Path(__file__).resolve().parent
+    if os.access(here, os.W_OK):
+        return
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    for candidate in (os.path.join(base, "visemeface", "numba"),
+                      os.path.join(tempfile.gettempdir(), f"visemeface-numba-{os.getuid()}")):
+        try:
+            os.makedirs(candidate, exist_ok=True)
+        except OSError:
+            continue
+        if os.access(candidate, os.W_OK):
+            os.environ["NUMBA_CACHE_DIR"] = candidate
+            try:  # numba already imported elsewhere: update its live config too
+                import numba.core.config as _cfg
+                _cfg.CACHE_DIR = candidate
+            except Exception:  # pragma: no cover - numba always importable here
+                pass
+            return
+
+
+_ensure_numba_cache_dir()
+
+import numba  # noqa: E402  (after the cache folder is chosen)
+from numba import njit, prange  # noqa: E402
+
+#: Hourglass base vectors Γ (8 × 4) for the node order of DESIGN §6: the
+#: columns are the products ξη, ηζ, ζξ, ξηζ of the nodes' local coordinates.
+HOURGLASS_BASE = np.array(
+    [[1, 1, 1, -1], [-1, 1, -1, 1], [1, -1, -1, -1], [-1, -1, 1, 1],
+     [1, -1, -1, 1], [-1, -1, 1, -1], [1, 1, 1, 1], [-1, 1, -1, -1]], dtype=np.float64)
+
+#: Seed 000 Table 1's hourglass coefficient κ.
+DEFAULT_HOURGLASS_KAPPA = 0.075
+
+_GAUSS = NODE_SIGNS / np.sqrt(3.0)
+
+
+class SimulationDiverged(InputError):
+    """A run produced a non-finite value or an inverted element (J ≤ 0).
+
+    Attributes ``step``, ``time`` and ``element`` say where.
+    """
+
+    def __init__(self, message: str, step: int, time: float, element: int):
+        super().__init__(message)
+        self.step, self.time, self.element = step, time, element
+
+
+# ---------------------------------------------------------------------------
+# Precomputation (numpy, once)
+# ---------------------------------------------------------------------------
+
+def element_geometry(nodes: np.ndarray, hexes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Uniform shape-function gradients and exact volumes of hex8 elements.
+
+    With ``∂x/∂ξ`` the Jacobian (columns c₀, c₁, c₂), ``adj(∂x/∂ξ)`` has rows
+    ``c₁×c₂, c₂×c₀, c₀×c₁``, so
+
+    .. math:: B_a = \\int \\frac{\\partial h_a}{\\partial x} dV
+              = \\int \\frac{\\partial h_a}{\\partial \\xi} \\operatorname{adj}
+              \\Big(\\frac{\\partial x}{\\partial \\xi}\\Big) d\\xi,\\qquad
+              V = \\int \\det \\frac{\\partial x}{\\partial \\xi} d\\xi .
+
+    Both integrands are at most cubic in each of ξ, η, ζ, so 2 × 2 × 2 Gauss
+    points integrate them exactly. Returns ``∂h/∂x = B / V``.
+
+    Parameters
+    ----------
+    nodes : ndarray (n, 3)
+    hexes : int ndarray (e, 8)
+
+    Returns
+    -------
+    dhdx : ndarray (e, 8, 3)
+        Σₐ dhdx[a] = 0 and Σₐ xₐ ⊗ dhdx[a] = I (exact for affine fields).
+    volume : ndarray (e,)
+    """
+    x = np.asarray(nodes, dtype=np.float64)[np.asarray(hexes)]        # (e, 8, 3)
+    s = NODE_SIGNS
+    B = np.zeros_like(x)
+    V = np.zeros(len(x))
+    for g in _GAUSS:
+        fac = 1.0 + s * g                                           # (8, 3)
+        dN = np.stack([s[:, 0] * fac[:, 1] * fac[:, 2], s[:, 1] * fac[:, 0] * fac[:, 2],
+                       s[:, 2] * fac[:, 0] * fac[:, 1]], axis=1) / 8.0   # (8, 3) ∂N/∂ξ
+        cols = np.einsum("eai,ak->eki", x, dN)                      # (e, 3, 3): cols[:, k] = ∂x/∂ξ_k
+        adj = np.stack([np.cross(cols[:, 1], cols[:, 2]), np.cross(cols[:, 2], cols[:, 0]),
+                        np.cross(cols[:, 0], cols[:, 1])], axis=1)  # (e, 3, 3) rows
+        V += np.einsum("ei,ei->e", cols[:, 0], adj[:, 0])
+        B += np.einsum("ak,eki->eai", dN, adj)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dhdx = B / V[:, None, None]
+    return np.ascontiguousarray(dhdx), V
+
+
+def hourglass_shape_vectors(nodes: np.ndarray, hexes: np.ndarray, dhdx: np.ndarray) -> np.ndarray:
+    """Flanagan–Belytschko hourglass shape vectors ``γ = Γ − (∂h/∂x)(xᵀ Γ)``.
+
+    Returns
+    -------
+    ndarray (e, 8, 4)
+        γ[e] is orthogonal to constant and linear nodal fields: Σₐ γₐₖ (A xₐ + b) = 0.
+    """
+    x = np.asarray(nodes, dtype=np.float64)[np.asarray(hexes)]
+    xg = np.einsum("ebi,bk->eik", x, HOURGLASS_BASE)               # (e, 3, 4)
+    return np.ascontiguousarray(HOURGLASS_BASE[None] - np.einsum("eai,eik->eak", dhdx, xg))
+
+
+def rigid_rotation(points: np.ndarray, centre, axis, angle: float) -> np.ndarray:
+    """Displacements ``(R − I)(p − c)`` of a rotation by ``angle`` about an axis.
+
+    Rodrigues: ``R v = v cos θ + (k × v) sin θ + k (k·v)(1 − cos θ)``, k the
+    unit axis. A jaw opening is a rotation about the axis through both jaw
+    joints (``prescribed_rotation``).
+    """
+    p = np.asarray(points, dtype=np.float64) - np.asarray(centre, dtype=np.float64)
+    k = np.asarray(axis, dtype=np.float64)
+    norm = np.linalg.norm(k)
+    if not norm > 0:
+        raise InputError(f"rotation axis must be non-zero, got {list(np.ravel(axis))}")
+    k = k / norm
+    c, s = np.cos(angle), np.sin(angle)
+    rotated = p * c + np.cross(k, p) * s + np.outer(p @ k, k) * (1.0 - c)
+    return rotated - p
+
+
+def prescribed_rotation(mesh: HexMesh, nodes, centre, axis, angle: Callable[[float], float]):
+    """A prescribed-displacement condition rotating ``nodes`` rigidly.
+
+    Returns ``(nodes, f)`` for :class:`TLEDSolver`'s ``prescribed`` with
+    ``f(t) = rigid_rotation(X[nodes], centre, axis, angle(t))``.
+    """
+    nodes = np.asarray(nodes, dtype=np.int64)
+    rest = mesh.nodes[nodes].copy()
+    return nodes, (lambda t: rigid_rotation(rest, centre, axis, angle(t)))
+
+
+# ---------------------------------------------------------------------------
+# numba kernels
+# ---------------------------------------------------------------------------
+
+@njit(parallel=True, cache=True, boundscheck=False)
+def _element_forces_nb(u, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, store_f, energy,
+                       want_energy):  # pragma: no cover - compiled
+    ne = conn.shape[0]
+    for e in prange(ne):
+        x00 = 1.0
+        x01 = 0.0
+        x02 = 0.0
+        x10 = 0.0
+        x11 = 1.0
+        x12 = 0.0
+        x20 = 0.0
+        x21 = 0.0
+        x22 = 1.0
+        q00 = 0.0
+        q01 = 0.0
+        q02 = 0.0
+        q10 = 0.0
+        q11 = 0.0
+        q12 = 0.0
+        q20 = 0.0
+        q21 = 0.0
+        q22 = 0.0
+        q30 = 0.0
+        q31 = 0.0
+        q32 = 0.0
+        for a in range(8):
+            n = conn[e, a]
+            u0 = u[n, 0]
+            u1 = u[n, 1]
+            u2 = u[n, 2]
+            d0 = dhdx[e, a, 0]
+            d1 = dhdx[e, a, 1]
+            d2 = dhdx[e, a, 2]
+            x00 += u0 * d0
+            x01 += u0 * d1
+            x02 += u0 * d2
+            x10 += u1 * d0
+            x11 += u1 * d1
+            x12 += u1 * d2
+            x20 += u2 * d0
+            x21 += u2 * d1
+            x22 += u2 * d2
+            g = gamma[e, a, 0]
+            q00 += g * u0
+            q01 += g * u1
+            q02 += g * u2
+            g = gamma[e, a, 1]
+            q10 += g * u0
+            q11 += g * u1
+            q12 += g * u2
+            g = gamma[e, a, 2]
+            q20 += g * u0
+            q21 += g * u1
+            q22 += g * u2
+            g = gamma[e, a, 3]
+            q30 += g * u0
+            q31 += g * u1
+            q32 += g * u2
+        c00 = x00 * x00 + x10 * x10 + x20 * x20
+        c11 = x01 * x01 + x11 * x11 + x21 * x21
+        c22 = x02 * x02 + x12 * x12 + x22 * x22
+        c01 = x00 * x01 + x10 * x11 + x20 * x21
+        c02 = x00 * x02 + x10 * x12 + x20 * x22
+        c12 = x01 * x02 + x11 * x12 + x21 * x22
+        J = x00 * (x11 * x22 - x12 * x21) - x01 * (x10 * x22 - x12 * x20) + x02 * (x10 * x21 - x11 * x20)
+        jac[e] = J
+        inv = 1.0 / (J * J)
+        i00 = (c11 * c22 - c12 * c12) * inv
+        i11 = (c00 * c22 - c02 * c02) * inv
+        i22 = (c00 * c11 - c01 * c01) * inv
+        i01 = (c02 * c12 - c01 * c22) * inv
+        i02 = (c01 * c12 - c02 * c11) * inv
+        i12 = (c01 * c02 - c00 * c12) * inv
+        I1 = c00 + c11 + c22
+        Jm23 = 1.0 / np.cbrt(J * J)
+        m = mu[e] * Jm23
+        t = K[e] * J * (J - 1.0) - m * I1 / 3.0
+        s00 = m + t * i00
+        s11 = m + t * i11
+        s22 = m + t * i22
+        s01 = t * i01
+        s02 = t * i02
+        s12 = t * i12
+        V = vol[e]
+        p00 = V * (x00 * s00 + x01 * s01 + x02 * s02)
+        p01 = V * (x00 * s01 + x01 * s11 + x02 * s12)
+        p02 = V * (x00 * s02 + x01 * s12 + x02 * s22)
+        p10 = V * (x10 * s00 + x11 * s01 + x12 * s02)
+        p11 = V * (x10 * s01 + x11 * s11 + x12 * s12)
+        p12 = V * (x10 * s02 + x11 * s12 + x12 * s22)
+        p20 = V * (x20 * s00 + x21 * s01 + x22 * s02)
+        p21 = V * (x20 * s01 + x21 * s11 + x22 * s12)
+        p22 = V * (x20 * s02 + x21 * s12 + x22 * s22)
+        k = hgk[e]
+        for a in range(8):
+            d0 = dhdx[e, a, 0]
+            d1 = dhdx[e, a, 1]
+            d2 = dhdx[e, a, 2]
+            g0 = gamma[e, a, 0]
+            g1 = gamma[e, a, 1]
+            g2 = gamma[e, a, 2]
+            g3 = gamma[e, a, 3]
+            fe[e, a, 0] = p00 * d0 + p01 * d1 + p02 * d2 + k * (g0 * q00 + g1 * q10 + g2 * q20 + g3 * q30)
+            fe[e, a, 1] = p10 * d0 + p11 * d1 + p12 * d2 + k * (g0 * q01 + g1 * q11 + g2 * q21 + g3 * q31)
+            fe[e, a, 2] = p20 * d0 + p21 * d1 + p22 * d2 + k * (g0 * q02 + g1 * q12 + g2 * q22 + g3 * q32)
+        if store_f:
+            fdef[e, 0, 0] = x00
+            fdef[e, 0, 1] = x01
+            fdef[e, 0, 2] = x02
+            fdef[e, 1, 0] = x10
+            fdef[e, 1, 1] = x11
+            fdef[e, 1, 2] = x12
+            fdef[e, 2, 0] = x20
+            fdef[e, 2, 1] = x21
+            fdef[e, 2, 2] = x22
+        if want_energy:
+            hg = (q00 * q00 + q01 * q01 + q02 * q02 + q10 * q10 + q11 * q11 + q12 * q12
+                  + q20 * q20 + q21 * q21 + q22 * q22 + q30 * q30 + q31 * q31 + q32 * q32)
+            energy[e] = V * (0.5 * mu[e] * (Jm23 * I1 - 3.0) + 0.5 * K[e] * (J - 1.0) * (J - 1.0)) + 0.5 * k * hg
+
+
+@njit(parallel=True, cache=True, boundscheck=False)
+def _integrate_nb(fe_flat, ptr, slot, R, A, B, C, u, uprev, unew):  # pragma: no cover - compiled
+    for n in prange(u.shape[0]):
+        f0 = 0.0
+        f1 = 0.0
+        f2 = 0.0
+        for p in range(ptr[n], ptr[n + 1]):
+            s = slot[p]
+            f0 += fe_flat[s, 0]
+            f1 += fe_flat[s, 1]
+            f2 += fe_flat[s, 2]
+        unew[n, 0] = A[n, 0] * (R[n, 0] - f0) + B[n, 0] * u[n, 0] + C[n, 0] * uprev[n, 0]
+        unew[n, 1] = A[n, 1] * (R[n, 1] - f1) + B[n, 1] * u[n, 1] + C[n, 1] * uprev[n, 1]
+        unew[n, 2] = A[n, 2] * (R[n, 2] - f2) + B[n, 2] * u[n, 2] + C[n, 2] * uprev[n, 2]
+
+
+@njit(parallel=True, cache=True, boundscheck=False)
+def _gather_nb(fe_flat, ptr, slot, out):  # pragma: no cover - compiled
+    for n in prange(out.shape[0]):
+        f0 = 0.0
+        f1 = 0.0
+        f2 = 0.0
+        for p in range(ptr[n], ptr[n + 1]):
+            s = slot[p]
+            f0 += fe_flat[s, 0]
+            f1 += fe_flat[s, 1]
+            f2 += fe_flat[s, 2]
+        out[n, 0] = f0
+        out[n, 1] = f1
+        out[n, 2] = f2
+
+
+# ---------------------------------------------------------------------------
+# numpy reference of the same kernels
+# ---------------------------------------------------------------------------
+
+def _element_forces_np(u, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, store_f, energy,
+                       want_energy):
+    ue = u[conn]                                                    # (e, 8, 3)
+    X = np.eye(3) + np.einsum("eai,eaj->eij", ue, dhdx)
+    C = np.einsum("eki,ekj->eij", X, X)
+    J = np.linalg.det(X)
+    Cinv = np.linalg.inv(C)
+    I1 = np.trace(C, axis1=1, axis2=2)
+    Jm23 = 1.0 / np.cbrt(J * J)
+    m = (mu * Jm23)[:, None, None]
+    S = m * np.eye(3) + (K * J * (J - 1.0) - mu * Jm23 * I1 / 3.0)[:, None, None] * Cinv
+    P = vol[:, None, None] * (X @ S)
+    q = np.einsum("eak,eai->eki", gamma, ue)                        # (e, 4, 3)
+    fe[:] = np.einsum("eij,eaj->eai", P, dhdx) + hgk[:, None, None] * np.einsum("eak,eki->eai", gamma, q)
+    jac[:] = J
+    if store_f:
+        fdef[:] = X
+    if want_energy:
+        energy[:] = (vol * (0.5 * mu * (Jm23 * I1 - 3.0) + 0.5 * K * (J - 1.0) ** 2)
+                     + 0.5 * hgk * np.einsum("eki,eki->e", q, q))
+
+
+def _gather_np(fe_flat, conn_flat, out):
+    for i in range(3):
+        out[:, i] = np.bincount(conn_flat, weights=fe_flat[:, i], minlength=len(out))
+
+
+# ---------------------------------------------------------------------------
+# Solver
+# ---------------------------------------------------------------------------
+
+@dataclass
+class Frame:
+    """One output of :meth:`TLEDSolver.run`.
+
+    Attributes
+    ----------
+    step : int
+    time : float
+        ``step · dt`` (s).
+    displacement : ndarray (n, 3)
+        Node displacements u(t) (m), a copy.
+    kinetic_energy : float
+        ½ Σ M v² with the centred velocity (u(t+dt) − u(t−dt)) / 2dt (J).
+    strain_energy : float
+        Σₑ V W(X) + ½ uᵀ HG u, hourglass energy included (J).
+    """
+
+    step: int
+    time: float
+    displacement: np.ndarray
+    kinetic_energy: float
+    strain_energy: float
+
+
+ElementHook = Callable[[int, float, np.ndarray, np.ndarray], "np.ndarray | None"]
+
+
+class TLEDSolver:
+    """Explicit dynamics of a hex8 neo-Hookean mesh (see the module docstring).
+
+    Parameters
+    ----------
+    mesh : HexMesh
+    materials : NeoHookean or sequence of NeoHookean
+        Indexed by ``mesh.material`` (e.g. ``[SOFT_TISSUE, SALIVA]``).
+    dt : float
+        Time step (s); refused if above :attr:`stable_dt`.
+    damping : float
+        Mass-proportional damping coefficient α (1/s); the seed uses 80.
+    hourglass_kappa : float
+        Hourglass coefficient κ (seed: 0.075).
+    fixed : int array of node ids, or bool array (n, 3)
+        Degrees of freedom held at zero displacement.
+    prescribed : sequence of (node ids, f)
+        ``f(t)`` returns the displacements (k, 3) (or one (3,) vector) of those
+        nodes at time t; see :func:`prescribed_rotation`.
+    forces : sequence of (node ids, f)
+        ``f(t)`` returns external nodal forces (k, 3) or (3,) (N) at time t.
+    element_hook : callable, optional
+        ``hook(step, time, F, forces)`` is called every step after the element
+        forces are computed and before they are assembled. ``F`` (e, 3, 3) holds
+        each element's deformation gradient X (so C = FᵀF, J = det F);
+        ``forces`` (e, 8, 3) the element's nodal internal forces (hourglass
+        included), which the hook may change in place; or it may return an
+        (e,) array of factors to scale each element's forces. Both arrays are
+        reused between steps: copy what must be kept.
+    backend : {"numba", "numpy"}
+        The parallel numba kernels, or the plain-numpy reference.
+
+    Examples
+    --------
+    >>> from visemeface.physics.hexmesh import box_mesh
+    >>> from visemeface.physics.materials import SOFT_TISSUE
+    >>> mesh = box_mesh((4, 1, 1), (0.04, 0.01, 0.01))
+    >>> solver = TLEDSolver(mesh, SOFT_TISSUE, dt=1e-5, damping=80.0,
+    ...                     fixed=mesh.node_sets["xmin"],
+    ...                     forces=[(mesh.node_sets["xmax"], lambda t: [0.01 * min(t / 0.1, 1), 0, 0])])
+    >>> frames = list(solver.run(n_steps=1000, output_every=500))
+    >>> [f.step for f in frames]
+    [0, 500, 1000]
+    """
+
+    def __init__(self, mesh: HexMesh, materials: NeoHookean | Sequence[NeoHookean], *, dt: float,
+                 damping: float = 0.0, hourglass_kappa: float = DEFAULT_HOURGLASS_KAPPA,
+                 fixed=None, prescribed: Sequence = (), forces: Sequence = (),
+                 element_hook: ElementHook | None = None, backend: str = "numba"):
+        if backend not in ("numba", "numpy"):
+            raise InputError(f"unknown TLED backend {backend!r}; use 'numba' or 'numpy'")
+        if not (np.isfinite(damping) and damping >= 0):
+            raise InputError(f"damping must be a number >= 0, got {damping!r}")
+        if not (np.isfinite(hourglass_kappa) and hourglass_kappa >= 0):
+            raise InputError(f"hourglass_kappa must be a number >= 0, got {hourglass_kappa!r}")
+        self.mesh = mesh
+        self.backend = backend
+        self.damping = float(damping)
+        self.kappa = float(hourglass_kappa)
+        self.element_hook = element_hook
+        n, ne = mesh.n_nodes, mesh.n_elements
+        if ne == 0:
+            raise InputError("the hex mesh has no elements")
+
+        mat = material_table(materials, mesh.material)
+        self.mu, self.K, self.rho = mat["mu"], mat["K"], mat["rho"]
+        self.conn = np.ascontiguousarray(mesh.hexes, dtype=np.int64)
+        self.dhdx, self.volume = element_geometry(mesh.nodes, self.conn)
+        if not (self.volume > 0).all():
+            e = int(np.flatnonzero(~(self.volume > 0))[0])
+            raise InputError(f"element {e} (nodes {self.conn[e].tolist()}) has volume "
+                             f"{self.volume[e]:.3g} m^3 <= 0: inverted or degenerate")
+        self.gamma = hourglass_shape_vectors(mesh.nodes, self.conn, self.dhdx)
+        a = np.einsum("eai,eai->e", self.dhdx, self.dhdx)
+        lam_2mu = self.K + 4.0 * self.mu / 3.0                     # λ + 2μ with λ = K − 2μ/3
+        self.hourglass_stiffness = self.kappa * self.volume * lam_2mu * a / 8.0
+
+        # Stability: dt_e = L_e / c_e, L_e = 1 / sqrt(2 (1 + κ) a_e).
+        self.characteristic_length = 1.0 / np.sqrt(2.0 * (1.0 + self.kappa) * a)
+        dt_e = self.characteristic_length / mat["wave_speed"]
+        self.critical_element = int(np.argmin(dt_e))
+        self.stable_dt = float(dt_e[self.critical_element])
+        if not (np.isfinite(dt) and dt > 0):
+            raise InputError(f"time step must be a positive number, got {dt!r}")
+        if dt > self.stable_dt:
+            e = self.critical_element
+            raise InputError(
+                f"time step {dt:.4g} s exceeds the stable limit {self.stable_dt:.4g} s "
+                f"(element {e}: characteristic length {self.characteristic_length[e]:.4g} m, "
+                f"wave speed {mat['wave_speed'][e]:.4g} m/s); use dt <= {self.stable_dt:.4g}")
+        self.dt = float(dt)
+
+        # Lumped mass ρV/8 per element node; central-difference coefficients per DOF.
+        mass = np.bincount(self.conn.ravel(), weights=np.repeat(self.rho * self.volume / 8.0, 8),
+                           minlength=n)
+        if not (mass > 0).all():
+            orphan = int(np.flatnonzero(~(mass > 0))[0])
+            raise InputError(f"node {orphan} belongs to no element (zero mass); remove unused nodes")
+        self.mass = mass
+        A = 1.0 / (mass / dt**2 + self.damping * mass / (2.0 * dt))
+        B = 2.0 * mass * A / dt**2
+        C = self.damping * mass * A / (2.0 * dt) - B / 2.0
+        self.free = self._free_mask(fixed)
+        self._A = np.ascontiguousarray(A[:, None] * self.free)
+        self._B = np.ascontiguousarray(B[:, None] * self.free)
+        self._C = np.ascontiguousarray(C[:, None] * self.free)
+
+        self.prescribed = [(self._node_ids(ids, f"prescribed[{i}]"), f) for i, (ids, f) in enumerate(prescribed)]
+        self.forces = [(self._node_ids(ids, f"forces[{i}]"), f) for i, (ids, f) in enumerate(forces)]
+
+        # Node -> (element, local node) map as CSR over flat slots e*8 + a.
+        flat = self.conn.ravel()
+        self._slot = np.ascontiguousarray(np.argsort(flat, kind="stable").astype(np.int64))
+        self._ptr = np.zeros(n + 1, dtype=np.int64)
+        np.cumsum(np.bincount(flat, minlength=n), out=self._ptr[1:])
+        self._conn_flat = flat
+
+        # Work buffers, allocated once.
+        self._fe = np.zeros((ne, 8, 3))
+        self._jac = np.zeros(ne)
+        self._fdef = np.zeros((ne, 3, 3) if element_hook is not None else (1, 3, 3))
+        self._energy = np.zeros(ne)
+        self._R = np.zeros((n, 3))
+
+    # -- set-up helpers -----------------------------------------------------
+
+    def _node_ids(self, ids, what: str) -> np.ndarray:
+        ids = np.asarray(ids)
+        if ids.dtype == bool:
+            if ids.shape != (self.mesh.n_nodes,):
+                raise InputError(f"{what}: boolean node mask must have shape ({self.mesh.n_nodes},), got {ids.shape}")
+            ids = np.flatnonzero(ids)
+        ids = np.asarray(ids, dtype=np.int64).ravel()
+        if ids.size and (ids.min() < 0 or ids.max() >= self.mesh.n_nodes):
+            raise InputError(f"{what}: node ids must lie in 0..{self.mesh.n_nodes - 1}, "
+                             f"got {ids.min()}..{ids.max()}")
+        return ids
+
+    def _free_mask(self, fixed) -> np.ndarray:
+        free = np.ones((self.mesh.n_nodes, 3))
+        if fixed is None:
+            return free
+        fixed = np.asarray(fixed)
+        if fixed.dtype == bool and fixed.shape == (self.mesh.n_nodes, 3):
+            free[fixed] = 0.0
+        else:
+            free[self._node_ids(fixed, "fixed")] = 0.0
+        return free
+
+    @staticmethod
+    def _values(f, t, k: int, what: str) -> np.ndarray:
+        v = np.asarray(f(t), dtype=np.float64)
+        try:
+            v = np.broadcast_to(v, (k, 3))
+        except ValueError:
+            raise InputError(f"{what} at t = {t:.6g} s returned shape {v.shape}; expected ({k}, 3) or (3,)") from None
+        return v
+
+    # -- kernels ------------------------------------------------------------
+
+    def _element_forces(self, u: np.ndarray, want_energy: bool) -> None:
+        kern = _element_forces_nb if self.backend == "numba" else _element_forces_np
+        kern(u, self.conn, self.dhdx, self.volume, self.gamma, self.hourglass_stiffness, self.mu, self.K,
+             self._fe, self._jac, self._fdef, self.element_hook is not None, self._energy, want_energy)
+
+    def internal_forces(self, u: np.ndarray) -> np.ndarray:
+        """Assembled internal nodal forces F(u) (n, 3) (N), hook not applied."""
+        u = np.ascontiguousarray(u, dtype=np.float64)
+        self._element_forces(u, False)
+        out = np.zeros((self.mesh.n_nodes, 3))
+        if self.backend == "numba":
+            _gather_nb(self._fe.reshape(-1, 3), self._ptr, self._slot, out)
+        else:
+            _gather_np(self._fe.reshape(-1, 3), self._conn_flat, out)
+        return out
+
+    def element_stress(self, u: np.ndarray) -> dict:
+        """Per-element deformation gradient, J and stresses for displacements u.
+
+        Returns
+        -------
+        dict of ndarray
+            ``F`` (e, 3, 3), ``J`` (e,), ``S`` (second Piola–Kirchhoff) and
+            ``cauchy`` (σ = F S Fᵀ / J), evaluated at the element centre with the
+            uniform gradient (numpy).
+        """
+        from visemeface.physics.materials import second_piola_kirchhoff
+
+        ue = np.asarray(u, dtype=np.float64)[self.conn]
+        F = np.eye(3) + np.einsum("eai,eaj->eij", ue, self.dhdx)
+        S = second_piola_kirchhoff(F, self.mu, self.K)
+        J = np.linalg.det(F)
+        return {"F": F, "J": J, "S": S, "cauchy": F @ S @ np.swapaxes(F, 1, 2) / J[:, None, None]}
+
+    def _check(self, step: int, t: float) -> None:
+        jmin = self._jac.min()
+        if jmin > 0 and np.isfinite(jmin) and np.isfinite(self._jac.max()):
+            return
+        bad = np.flatnonzero(~(self._jac > 0) | ~np.isfinite(self._jac))
+        e = int(bad[0])
+        J = self._jac[e]
+        what = "a non-finite deformation (NaN/inf displacement)" if not np.isfinite(J) else f"J = {J:.4g} <= 0 (inverted)"
+        raise SimulationDiverged(
+            f"simulation diverged at step {step} (t = {t:.6g} s): element {e} "
+            f"(nodes {self.conn[e].tolist()}) has {what}; {len(bad)} element(s) affected. "
+            f"Reduce dt (now {self.dt:.4g} s, stable limit {self.stable_dt:.4g} s), loads or prescribed motion, "
+            f"or raise damping", step, t, e)
+
+    def _apply_hook(self, step: int, t: float) -> None:
+        scale = self.element_hook(step, t, self._fdef, self._fe)
+        if scale is not None:
+            scale = np.asarray(scale, dtype=np.float64)
+            if scale.shape != (self.mesh.n_elements,):
+                raise InputError(f"element_hook returned shape {scale.shape}; expected "
+                                 f"({self.mesh.n_elements},) scale factors or None")
+            self._fe *= scale[:, None, None]
+
+    def _external(self, t: float) -> np.ndarray:
+        R = self._R
+        if self.forces:
+            R.fill(0.0)
+            for i, (ids, f) in enumerate(self.forces):
+                R[ids] += self._values(f, t, len(ids), f"forces[{i}]")
+        return R
+
+    def _impose(self, u: np.ndarray, t: float) -> None:
+        for i, (ids, f) in enumerate(self.prescribed):
+            u[ids] = self._values(f, t, len(ids), f"prescribed[{i}]")
+
+    # -- time stepping ------------------------------------------------------
+
+    def run(self, n_steps: int, output_every: int = 1, initial_displacement=None,
+            initial_velocity=None) -> Iterator[Frame]:
+        """Advance ``n_steps`` steps, yielding a :class:`Frame` every ``output_every``.
+
+        Frames are produced at steps 0, N, 2N, … ≤ n_steps. The start is
+        ``u(0) = u₀`` (with prescribed values imposed) and, by Taylor expansion,
+        ``u(−dt) = u₀ − dt v₀ + ½ dt² M⁻¹(R(0) − F(u₀))``.
+
+        Raises
+        ------
+        SimulationDiverged
+            When an element inverts (J ≤ 0) or a value turns NaN/inf, naming the
+            step, time and element.
+        """
+        n_steps, output_every = int(n_steps), int(output_every)
+        if n_steps < 0 or output_every < 1:
+            raise InputError(f"need n_steps >= 0 and output_every >= 1, got {n_steps}, {output_every}")
+        n, dt = self.mesh.n_nodes, self.dt
+        u = np.zeros((n, 3)) if initial_displacement is None else \
+            np.array(np.broadcast_to(np.asarray(initial_displacement, dtype=np.float64), (n, 3)))
+        u *= self.free
+        self._impose(u, 0.0)
+        v0 = np.zeros((n, 3)) if initial_velocity is None else \
+            np.broadcast_to(np.asarray(initial_velocity, dtype=np.float64), (n, 3))
+        self._element_forces(u, False)
+        self._check(0, 0.0)
+        if self.element_hook is not None:
+            self._apply_hook(0, 0.0)
+        force0 = np.zeros((n, 3))
+        _gather_np(self._fe.reshape(-1, 3), self._conn_flat, force0)
+        accel = (self._external(0.0) - force0) / self.mass[:, None]
+        u_prev = np.ascontiguousarray((u - dt * v0 + 0.5 * dt * dt * accel) * self.free)
+        self._impose(u_prev, 0.0)
+        u_new = np.zeros((n, 3))
+        fe_flat = self._fe.reshape(-1, 3)
+        numba_backend = self.backend == "numba"
+        for step in range(n_steps + 1):
+            t = step * dt
+            output = step % output_every == 0
+            self._element_forces(u, output)
+            self._check(step, t)
+            if self.element_hook is not None:
+                self._apply_hook(step, t)
+            R = self._external(t)
+            if numba_backend:
+                _integrate_nb(fe_flat, self._ptr, self._slot, R, self._A, self._B, self._C, u, u_prev, u_new)
+            else:
+                _gather_np(fe_flat, self._conn_flat, force0)
+                np.multiply(self._A, R - force0, out=u_new)
+                u_new += self._B * u + self._C * u_prev
+            self._impose(u_new, t + dt)
+            if output:
+                v = (u_new - u_prev) / (2.0 * dt)
+                yield Frame(step, t, u.copy(), float(0.5 * np.einsum("n,ni,ni->", self.mass, v, v)),
+                            float(self._energy.sum()))
+            u_prev, u, u_new = u, u_new, u_prev
+
+
+def set_threads(n: int | None) -> int:
+    """Set numba's thread count (None: all cores); returns the count in use."""
+    if n is not None:
+        numba.set_num_threads(int(n))
+    return numba.get_num_threads()
