@@ -1,0 +1,142 @@
+"""``visemeface speak TRANSCRIPT``: a timed transcript to a talking-face video and exports.
+
+The render and export options are shared with ``visemeface say`` (text in):
+:func:`add_render_arguments` adds them, :func:`render_segments` runs the job.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+ORDER = 20
+
+VIEWS = ("face", "mouth", "three-quarter")
+INTERPOLATIONS = ("coarticulation", "linear", "cosine")
+FORMATS = ("auto", "timed", "lab", "phn", "textgrid", "mfa-json", "mfa-csv", "dectalk", "text")
+
+EPILOG = """\
+examples:
+  visemeface speak one_five_zero_zero_six.txt                     # -> one_five_zero_zero_six.mp4
+  visemeface speak a.TextGrid --audio a.wav --emotion happiness=0.6 -o a.mp4
+  visemeface speak a.lab --no-video --gltf a.glb --pc2 a.pc2 --track a.csv
+  visemeface speak a.txt --frames a_frames          # PNG frames too; after Ctrl-C:
+  visemeface speak a.txt --frames a_frames --resume --force   # keeps the finished frames
+
+Frames are streamed (pose, render, write one at a time): memory does not grow
+with the length of the utterance. --frames DIR renders into DIR.partial/ and
+renames it when done; --resume reuses the frames there whose render settings
+match (a hidden manifest holds a hash of face, rig, track, size and view).
+"""
+
+
+def add_render_arguments(p: argparse.ArgumentParser) -> None:
+    """Options shared by ``speak`` and ``say``: animation, rendering and exports."""
+    anim = p.add_argument_group("animation")
+    anim.add_argument("--emotion", action="append", metavar="NAME[=W]",
+                      help="blend an emotion over the whole utterance, e.g. happiness=0.6 "
+                      "(repeatable; see `visemeface emotions`)")
+    anim.add_argument("--interp", choices=INTERPOLATIONS, default="coarticulation",
+                      help="interpolation between visemes (default: Cohen-Massaro coarticulation)")
+    anim.add_argument("--fps", type=float, default=30.0, help="frame rate (default 30)")
+    anim.add_argument("--audio", type=Path, metavar="WAV",
+                      help="sound to mux into the MP4 (starts at t=0; padded or cut to the animation)")
+    ren = p.add_argument_group("rendering")
+    ren.add_argument("--size", type=int, default=512, help="frame width = height in pixels, a multiple "
+                     "of 16 (default 512)")
+    ren.add_argument("--view", choices=VIEWS, default="face", help="camera (default face)")
+    exp = p.add_argument_group("outputs")
+    exp.add_argument("--no-video", action="store_true", help="write no MP4 (only the exports)")
+    exp.add_argument("--frames", type=Path, metavar="DIR", help="also write a PNG per frame "
+                     "(frame_000000.png, ...)")
+    exp.add_argument("--obj", type=Path, metavar="DIR", help="also write an OBJ mesh per frame")
+    exp.add_argument("--pc2", type=Path, metavar="FILE.pc2",
+                     help="also write a PC2 point cache (Blender Mesh Cache modifier)")
+    exp.add_argument("--gltf", type=Path, metavar="FILE.glb",
+                     help="also write binary glTF: the face, one morph target per muscle, the jaw as "
+                     "sampled morphs, the track as a morph-weight animation")
+    exp.add_argument("--track", type=Path, metavar="FILE.csv", help="also write the activation track")
+    exp.add_argument("--resume", action="store_true",
+                     help="keep frames already rendered into --frames DIR by an interrupted run")
+    exp.add_argument("--force", action="store_true", help="overwrite existing outputs")
+    exp.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+
+
+def outputs_from_args(args, default_video: Path):
+    """:class:`~visemeface.pipeline.Outputs` from the parsed options."""
+    from visemeface.pipeline import Outputs
+
+    video = None if args.no_video else (args.output or default_video)
+    return Outputs(video=video, frames=args.frames, obj=args.obj, pc2=args.pc2, gltf=args.gltf,
+                   track=args.track, force=args.force, resume=args.resume)
+
+
+def check_early(args, default_video: Path):
+    """Checks that need no rig or transcript: outputs, options, audio. Returns (outputs, settings)."""
+    from visemeface.errors import InputError
+    from visemeface.pipeline import RenderSettings, check_audio, plan_outputs
+
+    out = outputs_from_args(args, default_video)
+    plan_outputs(out)
+    if not (args.fps > 0 and args.fps <= 1000):
+        raise InputError(f"--fps must be in (0, 1000], got {args.fps:g}")
+    if args.size < 16 or args.size % 16:
+        raise InputError(f"--size must be a positive multiple of 16, got {args.size}")
+    if args.audio is not None:
+        check_audio(args.audio)
+    settings = RenderSettings(size=args.size, view=args.view, fps=args.fps, audio=args.audio,
+                              show_progress=not args.quiet)
+    return out, settings
+
+
+def render_segments(segments, args, out, settings) -> int:
+    """Segments -> activation track -> video and exports; prints a summary."""
+    from visemeface.muscles.rig import default_rig
+    from visemeface.pipeline import animate, parse_emotions
+    from visemeface.postures.library import load_expressions, load_visemes
+    from visemeface.speech.timeline import activation_track
+
+    rig = default_rig()
+    emotions = parse_emotions(args.emotion, load_expressions(rig=rig).index)
+    track = activation_track(segments, load_visemes(rig=rig), fps=args.fps, mode=args.interp,
+                             emotions=emotions or None)
+    stats = animate(track, rig, out, settings)
+    if not args.quiet:
+        written = [str(p) for p in out.paths().values()]
+        extra = f", {stats['kept']} kept from the previous run" if stats["kept"] else ""
+        print(f"{stats['frames']} frames ({stats['frames'] / args.fps:.2f} s at {args.fps:g} fps{extra}) "
+              f"-> {', '.join(written)}")
+    return 0
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "speak",
+        help="animate a timed transcript: MP4 video (+ audio) and PNG/OBJ/PC2/glTF exports",
+        description="Animate the face along a timed phoneme transcript (timed text, HTK .lab, TIMIT .PHN, "
+        "Praat/MFA TextGrid, MFA JSON/CSV, DECtalk string, or plain English text) and write an MP4 "
+        "(TRANSCRIPT's stem + .mp4 in the current folder unless -o) and any exports.",
+        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("transcript", type=Path, metavar="TRANSCRIPT", help="timed phoneme transcript")
+    p.add_argument("-o", "--output", type=Path, metavar="OUT.mp4", help="video file to write")
+    src = p.add_argument_group("transcript")
+    src.add_argument("--format", choices=FORMATS, default="auto",
+                     help="transcript format (default: detected from the content)")
+    src.add_argument("--tier", help="TextGrid tier with the phones (default: the phone tier)")
+    src.add_argument("--sample-rate", type=int, default=16000,
+                     help="sample rate of TIMIT .PHN sample indices (default 16000)")
+    add_render_arguments(p)
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from visemeface.errors import InputError
+
+    if not args.transcript.is_file():
+        raise InputError("transcript not found", args.transcript)
+    out, settings = check_early(args, Path.cwd() / (args.transcript.stem + ".mp4"))
+    from visemeface.speech.transcripts import read_transcript
+
+    fmt = None if args.format == "auto" else args.format
+    segments = read_transcript(args.transcript, fmt=fmt, tier=args.tier, sample_rate=args.sample_rate)
+    return render_segments(segments, args, out, settings)
