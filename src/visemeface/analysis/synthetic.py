@@ -97,3 +97,32 @@ def mouth_image(size, box, openings=(), *, bridges=(), tongues=(), teeth=(), spe
             img[max(0, y - 1):y + 2, max(0, x - 1):x + 2] = 255
     img += rng.normal(0.0, noise, img.shape)
     return np.clip(np.rint(img), 0, 255).astype(np.uint8)
+
+
+def merging_mouth_frames(n_frames: int = 40, merge_frame: int = 20, size=(256, 256), box=None,
+                         noise: float = 6.0, seed: int = 0):
+    """Yield frames of a mouth opening whose two halves merge at ``merge_frame``.
+
+    One elliptical opening (semi-axes ``0.3 w`` and a height growing linearly
+    from ``0.04 w`` to ``0.1 w``) is split by a central lip bridge ``0.06 w``
+    wide -- stuck saliva -- on frames ``< merge_frame``; from ``merge_frame``
+    on, the bridge is gone. So the count drops 2 -> 1 and the largest opening's
+    width jumps from about ``0.27 w`` to ``0.6 w`` exactly at ``merge_frame``
+    (seed 001 Figs. 22 and 26).
+
+    Parameters
+    ----------
+    box : (x, y, w, h), optional
+        Mouth box; default: centred, ``w = 0.78`` of the frame width, ``h = w / 2``.
+    """
+    h, w = size
+    if box is None:
+        bw = int(round(0.78 * w))
+        box = ((w - bw) // 2, (h - bw // 2) // 2, bw, bw // 2)
+    bx, by, bw, bh = box
+    cx, cy = bx + (bw - 1) / 2, by + bh / 2
+    for i in range(n_frames):
+        b = bw * (0.04 + 0.06 * i / max(1, n_frames - 1))
+        bridge = [(cx - 0.03 * bw, cx + 0.03 * bw)] if i < merge_frame else []
+        yield mouth_image(size, box, [Ellipse(cx, cy, 0.3 * bw, b)], bridges=bridge, noise=noise,
+                          seed=seed + i)

@@ -1,0 +1,224 @@
+"""Mouth-opening profiles over time, their distance and plots (seed 001 §4-5).
+
+A *profile* is a pandas DataFrame, one row per frame, with columns
+
+``frame``   int, 0-based frame index
+``time``    seconds, ``frame / fps``
+``count``   number of mouth openings
+``area``    largest opening's area / w**2
+``width``   largest opening's width / w
+``height``  largest opening's height / w
+``d_area``  :math:`\\Delta \\mathrm{area}_i = \\mathrm{area}_i - \\mathrm{area}_{i-1}` (NaN on frame 0)
+``d_width`` :math:`\\Delta \\mathrm{width}_i` likewise
+
+where ``w`` is the natural mouth width in pixels (the mouth box's width).
+``df.attrs`` holds ``fps``, ``mouth_width`` (px) and ``source``. The
+derivatives are per-frame differences, as in seed 001: a jump of the width
+when two openings merge shows up as one spike (Figs. 25-26).
+
+Profiles are saved as CSV (:func:`write_profile`, :func:`read_profile`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Mapping
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from visemeface.analysis.openings import MouthBox, OpeningDetector, Openings
+from visemeface.errors import InputError
+from visemeface.outputs import atomic_output
+
+COLUMNS = ("frame", "time", "count", "area", "width", "height", "d_area", "d_width")
+METRICS = ("area", "width", "height")
+LABELS = {
+    "count": "openings",
+    "area": "area / w²",
+    "width": "width / w",
+    "height": "height / w",
+    "d_area": "Δ area / frame",
+    "d_width": "Δ width / frame",
+}
+
+
+def profile_from_openings(openings: Iterable[Openings], fps: float, source: str = "") -> pd.DataFrame:
+    """Build a profile from per-frame detections (largest opening's metrics)."""
+    if not (np.isfinite(fps) and fps > 0):
+        raise InputError(f"fps must be a positive number, got {fps}")
+    rows = [(o.count, o.largest_area, o.largest_width, o.largest_height, o.mouth_width) for o in openings]
+    arr = np.asarray(rows, dtype=np.float64).reshape(-1, 5)
+    n = arr.shape[0]
+    frame = np.arange(n, dtype=np.int64)
+    df = pd.DataFrame({
+        "frame": frame,
+        "time": frame / float(fps),
+        "count": arr[:, 0].astype(np.int64),
+        "area": arr[:, 1],
+        "width": arr[:, 2],
+        "height": arr[:, 3],
+    })
+    add_derivatives(df)
+    df.attrs.update(fps=float(fps), mouth_width=int(arr[0, 4]) if n else 0, source=str(source))
+    return df
+
+
+def add_derivatives(df: pd.DataFrame) -> pd.DataFrame:
+    """Set ``d_area`` and ``d_width``: differences to the previous frame (NaN on the first)."""
+    df["d_area"] = df["area"].diff()
+    df["d_width"] = df["width"].diff()
+    return df
+
+
+def analyze_frames(frames: Iterable[np.ndarray], box, fps: float, detector: OpeningDetector | None = None,
+                   on_frame: Callable[[int, np.ndarray, Openings], None] | None = None,
+                   source: str = "") -> pd.DataFrame:
+    """Detect the openings of every frame and return the profile.
+
+    Parameters
+    ----------
+    frames : iterable of ndarray (H, W, 3) uint8
+        RGB frames.
+    box : MouthBox or (x, y, w, h)
+        Mouth box; checked against the first frame.
+    fps : float
+    detector : OpeningDetector, optional
+        Settings (default: Otsu, no hull, no teeth handling).
+    on_frame : callable(index, frame, openings), optional
+        Called after each frame (e.g. to write an overlay).
+    """
+    detector = detector or OpeningDetector()
+    box = MouthBox.of(box)
+    found = []
+    for i, frame in enumerate(frames):
+        op = detector.detect(frame, box)
+        found.append(op)
+        if on_frame is not None:
+            on_frame(i, frame, op)
+    if not found:
+        raise InputError(f"no frames to analyse{' in ' + source if source else ''}")
+    return profile_from_openings(found, fps, source)
+
+
+def write_profile(df: pd.DataFrame, path: str | Path, force: bool = False) -> None:
+    """Write a profile as CSV (never overwrites without ``force``)."""
+    with atomic_output(path, force) as tmp:
+        df.loc[:, list(COLUMNS)].to_csv(tmp, index=False, float_format="%.8g", lineterminator="\n")
+
+
+def read_profile(path: str | Path) -> pd.DataFrame:
+    """Read a profile CSV written by :func:`write_profile`; ``attrs["fps"]`` from the times."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("no such file", path)
+    try:
+        df = pd.read_csv(path)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+        raise InputError(f"not a profile CSV: {str(exc).splitlines()[0]}", path) from None
+    missing = [c for c in ("time", *METRICS) if c not in df.columns]
+    if missing:
+        raise InputError(f"not a profile CSV: missing column(s) {', '.join(missing)}", path)
+    for c in ("time", *METRICS):
+        if not pd.api.types.is_numeric_dtype(df[c]):
+            bad = pd.to_numeric(df[c], errors="coerce").isna() & df[c].notna()
+            row = int(np.argmax(bad.to_numpy()))
+            raise InputError(f"column {c!r} has a non-number {df[c].iloc[row]!r}", path, row + 2)
+    t = df["time"].to_numpy(float)
+    if len(t) < 2:
+        raise InputError("a profile needs at least 2 frames", path)
+    if not np.all(np.diff(t) > 0):
+        raise InputError("times must increase from row to row", path)
+    if "d_area" not in df.columns or "d_width" not in df.columns:
+        add_derivatives(df)
+    df.attrs.update(fps=float(1.0 / np.median(np.diff(t))), source=str(path))
+    return df
+
+
+def _fps(df: pd.DataFrame) -> float:
+    fps = df.attrs.get("fps")
+    if fps:
+        return float(fps)
+    return float(1.0 / np.median(np.diff(df["time"].to_numpy(float))))
+
+
+def l2_distance(a: pd.DataFrame, b: pd.DataFrame, columns: Iterable[str] = METRICS) -> dict[str, float]:
+    """L2 distance between two profiles, aligned by time.
+
+    .. math:: d_c(a, b) = \\sqrt{\\sum_k (c_a(t_k) - c_b(t_k))^2}
+
+    over the sample times :math:`t_k` of the profile with the *lower* frame
+    rate (``a``'s if equal) that lie in the time span both profiles cover.
+    Each profile is linearly interpolated in time onto those :math:`t_k`, so
+    videos with different frame rates are compared at common instants; with
+    equal rates and start times this is the plain L2 norm of the difference
+    of the columns, as in seed 001 §5.
+
+    Returns
+    -------
+    dict
+        ``{column: distance}``.
+    """
+    columns = list(columns)
+    for name, df in (("first", a), ("second", b)):
+        missing = [c for c in ("time", *columns) if c not in df.columns]
+        if missing:
+            raise InputError(f"{name} profile lacks column(s) {', '.join(missing)}")
+    ref = a if _fps(a) <= _fps(b) else b
+    ta, tb = a["time"].to_numpy(float), b["time"].to_numpy(float)
+    lo, hi = max(ta[0], tb[0]), min(ta[-1], tb[-1])
+    eps = 1e-9 * max(1.0, abs(hi))
+    grid = ref["time"].to_numpy(float)
+    grid = grid[(grid >= lo - eps) & (grid <= hi + eps)]
+    if grid.size == 0:
+        raise InputError(f"the profiles do not overlap in time ({ta[0]:.3f}-{ta[-1]:.3f} s vs "
+                         f"{tb[0]:.3f}-{tb[-1]:.3f} s)")
+    out = {}
+    for c in columns:
+        va = np.interp(grid, ta, a[c].to_numpy(float))
+        vb = np.interp(grid, tb, b[c].to_numpy(float))
+        out[c] = float(np.sqrt(np.nansum((va - vb) ** 2)))
+    return out
+
+
+def plot_profiles(profiles: Mapping[str, pd.DataFrame], path: str | Path,
+                  metrics: Iterable[str] = ("count", "area", "width", "height", "d_area", "d_width"),
+                  title: str | None = None, force: bool = False) -> None:
+    """Plot profiles over time, several videos overlaid (seed 001 Figs. 16-26), as PNG.
+
+    One panel per metric, stacked with a shared time axis; one line per
+    profile, labelled with its key in ``profiles``.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    metrics = list(metrics)
+    if not profiles:
+        raise InputError("nothing to plot: no profiles")
+    for c in metrics:
+        if c not in LABELS:
+            raise InputError(f"unknown metric {c!r}; known: {', '.join(LABELS)}")
+    fig = Figure(figsize=(8, 1.9 * len(metrics) + 0.6), dpi=100, layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(len(metrics), 1, sharex=True, squeeze=False)[:, 0]
+    for label, df in profiles.items():
+        t = df["time"].to_numpy(float)
+        for ax, c in zip(axes, metrics):
+            y = df[c].to_numpy(float)
+            if c == "count":
+                ax.step(t, y, where="post", label=label, lw=1.4)
+            else:
+                ax.plot(t, y, label=label, lw=1.4)
+    for ax, c in zip(axes, metrics):
+        ax.set_ylabel(LABELS[c])
+        ax.grid(True, alpha=0.3)
+        if c == "count":
+            ax.yaxis.get_major_locator().set_params(integer=True)
+        if c.startswith("d_"):
+            ax.axhline(0.0, color="0.5", lw=0.6)
+    axes[-1].set_xlabel("time (s)")
+    axes[0].legend(loc="best", fontsize="small")
+    if title:
+        fig.suptitle(title)
+    with atomic_output(path, force) as tmp:
+        fig.savefig(tmp, format="png")

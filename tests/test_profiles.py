@@ -1,0 +1,125 @@
+"""Opening profiles over time: merging openings, L2 distances, CSV and plots."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from visemeface.analysis.openings import OpeningDetector
+from visemeface.analysis.profiles import (
+    COLUMNS, analyze_frames, l2_distance, plot_profiles, read_profile, write_profile)
+from visemeface.analysis.synthetic import merging_mouth_frames
+from visemeface.errors import InputError
+
+BOX = (28, 78, 200, 100)        # the default box of merging_mouth_frames at 256x256
+
+
+@pytest.fixture(scope="module")
+def merging():
+    return analyze_frames(merging_mouth_frames(30, 17, (256, 256)), BOX, fps=30, source="merge17")
+
+
+def test_merge_shows_as_count_drop_and_width_spike(merging):
+    df = merging
+    assert list(df.columns) == list(COLUMNS)
+    count = df["count"].to_numpy()
+    assert (count[:17] == 2).all() and (count[17:] == 1).all()
+    d_width = df["d_width"].to_numpy()
+    assert np.nanargmax(np.abs(d_width)) == 17
+    # the spike is the jump from one half (~0.27 w) to the whole opening (0.6 w)
+    assert d_width[17] == pytest.approx(0.6 - 0.27, abs=0.02)
+    others = np.delete(d_width[1:], 16)
+    assert np.abs(others).max() < 0.02
+    assert np.nanargmax(df["d_area"].to_numpy()) == 17
+    assert np.isnan(d_width[0])
+    np.testing.assert_allclose(df["time"], np.arange(30) / 30)
+    assert df.attrs["fps"] == 30 and df.attrs["mouth_width"] == 200
+
+
+def test_hull_does_not_hide_the_merge():
+    df = analyze_frames(merging_mouth_frames(12, 6, (256, 256)), BOX, fps=25,
+                        detector=OpeningDetector(hull=True))
+    assert list(df["count"]) == [2] * 6 + [1] * 6
+
+
+def test_on_frame_sees_every_frame():
+    seen = []
+    analyze_frames(merging_mouth_frames(5, 2, (256, 256)), BOX, 30, on_frame=lambda i, f, o: seen.append((i, o.count)))
+    assert seen == [(0, 2), (1, 2), (2, 1), (3, 1), (4, 1)]
+
+
+def test_no_frames_is_an_input_error():
+    with pytest.raises(InputError, match="no frames"):
+        analyze_frames(iter([]), BOX, 30)
+
+
+def _profile(t, width, area=None):
+    area = np.zeros_like(t) if area is None else area
+    return pd.DataFrame({"time": t, "area": area, "width": width, "height": np.zeros_like(t)})
+
+
+def test_l2_identical_is_zero_and_constant_offset_is_exact(merging):
+    assert l2_distance(merging, merging) == {"area": 0.0, "width": 0.0, "height": 0.0}
+    t = np.arange(50) / 30
+    d = l2_distance(_profile(t, np.sin(t)), _profile(t, np.sin(t) + 0.1))
+    assert d["width"] == pytest.approx(0.1 * np.sqrt(50))
+    assert d["area"] == 0.0
+
+
+def test_l2_resamples_when_frame_rates_differ():
+    """The same smooth motion filmed at 30 and 60 fps is (almost) the same profile."""
+    t30, t60 = np.arange(31) / 30, np.arange(61) / 60
+    f = lambda t: 0.3 + 0.2 * np.sin(2 * np.pi * t)       # noqa: E731
+    a, b = _profile(t30, f(t30)), _profile(t60, f(t60))
+    a.attrs["fps"], b.attrs["fps"] = 30.0, 60.0
+    d_ab, d_ba = l2_distance(a, b)["width"], l2_distance(b, a)["width"]
+    assert d_ab == pytest.approx(d_ba)
+    assert d_ab < 1e-12                   # sampled at a's instants, which b contains
+    # a shifted copy is measured on the common span only, at the slower rate's instants
+    c = _profile(t60 + 0.5, f(t60 + 0.5))
+    c.attrs["fps"] = 60.0
+    assert l2_distance(a, c)["width"] < 1e-12
+    assert l2_distance(a, _profile(t30 + 0.5, f(t30) + 0.05))["width"] == pytest.approx(
+        np.sqrt(np.sum((f(t30[15:]) - f(t30[:16]) - 0.05) ** 2)))
+
+
+def test_l2_needs_overlap():
+    t = np.arange(10) / 30
+    with pytest.raises(InputError, match="do not overlap"):
+        l2_distance(_profile(t, t), _profile(t + 5, t))
+
+
+def test_csv_round_trip(tmp_path, merging):
+    path = tmp_path / "p.csv"
+    write_profile(merging, path)
+    back = read_profile(path)
+    pd.testing.assert_frame_equal(back, merging, check_exact=False, rtol=1e-7)
+    assert back.attrs["fps"] == pytest.approx(30)
+    with pytest.raises(InputError, match="exists"):
+        write_profile(merging, path)
+
+
+def test_read_profile_errors(tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("time,area,width\n0,1,2\n0.1,1,2\n")
+    with pytest.raises(InputError, match="missing column.*height"):
+        read_profile(bad)
+    bad.write_text("time,area,width,height\n0,1,2,3\n0.1,x,2,3\n")
+    with pytest.raises(InputError, match=r"bad.csv:3: column 'area' has a non-number 'x'"):
+        read_profile(bad)
+    with pytest.raises(InputError, match="no such file"):
+        read_profile(tmp_path / "none.csv")
+
+
+def test_plot_writes_a_png(tmp_path, merging):
+    import matplotlib.image as mpimg
+    other = merging.copy()
+    other["width"] = other["width"] * 0.9
+    out = tmp_path / "plot.png"
+    plot_profiles({"merge": merging, "scaled": other}, out, title="merge at frame 17")
+    img = mpimg.imread(out)
+    assert img.shape[0] > img.shape[1] > 500             # stacked panels
+    # lines of two colours were drawn: plenty of strongly coloured pixels
+    rgb = img[..., :3]
+    assert ((rgb.max(axis=2) - rgb.min(axis=2)) > 0.4).sum() > 2000
+    with pytest.raises(InputError, match="unknown metric"):
+        plot_profiles({"a": merging}, tmp_path / "x.png", metrics=["speed"])
