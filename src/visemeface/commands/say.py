@@ -42,6 +42,5 @@ def run(args) -> int:
     if args.rate is not None and not 20 <= args.rate <= 1000:
         raise InputError(f"--rate must be between 20 and 1000 words per minute, got {args.rate:g}")
     out, settings = check_early(args, Path.cwd() / "say.mp4")
-    kw = {} if args.rate is None else {"rate_wpm": args.rate}
-    segments = text_to_segments(args.text, audio=args.audio, **kw)
+    segments = text_to_segments(args.text, rate_wpm=args.rate, audio=args.audio)
     return render_segments(segments, args, out, settings)

@@ -21,7 +21,7 @@ examples:
   visemeface speak a.TextGrid --audio a.wav --emotion happiness=0.6 -o a.mp4
   visemeface speak a.lab --no-video --gltf a.glb --pc2 a.pc2 --track a.csv
   visemeface speak a.txt --frames a_frames          # PNG frames too; after Ctrl-C:
-  visemeface speak a.txt --frames a_frames --resume --force   # keeps the finished frames
+  visemeface speak a.txt --frames a_frames --resume   # keeps the finished frames
 
 Frames are streamed (pose, render, write one at a time): memory does not grow
 with the length of the utterance. --frames DIR renders into DIR.partial/ and
