@@ -1,0 +1,395 @@
+"""The face surface: vertices, quads, named regions and landmarks, and its files.
+
+A :class:`FaceMesh` is the one geometry every stage shares. Quads (not only
+triangles) are kept so that the surface can later be extruded into hexahedra;
+``triangles`` splits them for rendering. Regions are sorted vertex-index
+arrays; landmarks are single vertex indices.
+
+Files
+-----
+The surface is written through trimesh (OBJ, PLY, GLB/glTF by suffix) with
+per-vertex colours, beside a JSON sidecar ``<stem>.landmarks.json``::
+
+    {"format": "visemeface-landmarks", "version": 1,
+     "landmarks": {"nose_tip": 1234, "chin": [0.0, -0.04, 0.01], ...},
+     "regions": {"upper_lip": [..], ...},
+     "quads": [[a, b, c, d], ...]}          # optional
+
+A landmark may be a vertex index or an ``[x, y, z]`` position, which is
+snapped to the nearest vertex. ``quads`` lets a file that only stores
+triangles give its quads back; a user's mesh without them loads with no quads.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse
+
+from visemeface.errors import InputError
+from visemeface.outputs import atomic_output
+
+#: Landmark names of docs/conventions.md.
+LANDMARK_NAMES = (
+    "mouth_corner_left", "mouth_corner_right", "upper_lip_mid", "lower_lip_mid",
+    "upper_lip_top", "lower_lip_bottom", "chin", "nose_tip",
+    "brow_inner_left", "brow_inner_right", "brow_outer_left", "brow_outer_right",
+    "jaw_joint_left", "jaw_joint_right", "eye_centre_left", "eye_centre_right",
+    "cheek_left", "cheek_right", "nasion",
+)
+
+#: Linear-RGB-ish display colours (0..1) used when a mesh carries none.
+SKIN = np.array([0.86, 0.66, 0.55])
+LIP = np.array([0.74, 0.40, 0.40])
+CAVITY = np.array([0.10, 0.025, 0.03])
+EYE = np.array([0.90, 0.89, 0.86])
+
+MESH_SUFFIXES = (".obj", ".ply", ".glb", ".gltf")
+
+
+def sidecar_path(path: str | Path) -> Path:
+    """``face.obj`` -> ``face.landmarks.json`` (same folder)."""
+    path = Path(path)
+    return path.with_name(path.stem + ".landmarks.json")
+
+
+def split_quads(quads: np.ndarray) -> np.ndarray:
+    """Split quads ``(a, b, c, d)`` into triangles ``(a, b, c)``, ``(a, c, d)``.
+
+    Both triangles keep the quad's counter-clockwise order, so their normals
+    point the same way as the quad's.
+    """
+    quads = np.asarray(quads, dtype=np.int64).reshape(-1, 4)
+    tris = np.empty((2 * len(quads), 3), dtype=np.int64)
+    tris[0::2] = quads[:, [0, 1, 2]]
+    tris[1::2] = quads[:, [0, 2, 3]]
+    return tris
+
+
+def face_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    r"""Area-weighted triangle normals :math:`(b - a) \times (c - a)` (length = 2·area)."""
+    v = np.asarray(vertices, dtype=np.float64)
+    a, b, c = v[triangles[:, 0]], v[triangles[:, 1]], v[triangles[:, 2]]
+    return np.cross(b - a, c - a)
+
+
+class NormalAccumulator:
+    r"""Per-vertex normals for a fixed topology, fast enough for every frame.
+
+    The vertex normal is the normalised sum of the area-weighted normals of the
+    triangles around it,
+
+    .. math:: n_i = \frac{\sum_{t \ni i} (b_t - a_t) \times (c_t - a_t)}
+                         {\lVert \sum_{t \ni i} (b_t - a_t) \times (c_t - a_t) \rVert},
+
+    computed as one sparse product ``S @ N_faces`` with the vertex-triangle
+    incidence matrix ``S`` built once.
+    """
+
+    def __init__(self, triangles: np.ndarray, n_vertices: int):
+        self.triangles = np.ascontiguousarray(triangles, dtype=np.int64)
+        t = len(self.triangles)
+        rows = self.triangles.ravel()
+        cols = np.repeat(np.arange(t), 3)
+        self._incidence = scipy.sparse.csr_matrix(
+            (np.ones(3 * t), (rows, cols)), shape=(n_vertices, t))
+
+    def __call__(self, vertices: np.ndarray) -> np.ndarray:
+        n = self._incidence @ face_normals(vertices, self.triangles)
+        length = np.linalg.norm(n, axis=1, keepdims=True)
+        return n / np.where(length > 0, length, 1.0)
+
+
+def vertex_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Unit area-weighted vertex normals (see :class:`NormalAccumulator`)."""
+    return NormalAccumulator(triangles, len(vertices))(vertices)
+
+
+@dataclass
+class FaceMesh:
+    """A face surface with named vertex regions and landmarks.
+
+    Parameters
+    ----------
+    vertices : (N, 3) float64
+        Rest positions in metres (+x subject's left, +y up, +z forward).
+    quads : (Q, 4) int64
+        Counter-clockwise seen from outside.
+    tris : (T, 3) int64
+        Extra triangles that are not part of a quad (e.g. an eye's pupil fan).
+    regions : dict[str, ndarray]
+        Name -> sorted unique int64 vertex indices.
+    landmarks : dict[str, int]
+        Name -> vertex index.
+    colors : (N, 3) float, optional
+        Display colours in 0..1; derived from the regions when absent.
+    """
+
+    vertices: np.ndarray
+    quads: np.ndarray
+    tris: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), np.int64))
+    regions: dict = field(default_factory=dict)
+    landmarks: dict = field(default_factory=dict)
+    colors: np.ndarray | None = None
+
+    def __post_init__(self):
+        self.vertices = np.ascontiguousarray(self.vertices, dtype=np.float64).reshape(-1, 3)
+        self.quads = np.ascontiguousarray(self.quads, dtype=np.int64).reshape(-1, 4)
+        self.tris = np.ascontiguousarray(self.tris, dtype=np.int64).reshape(-1, 3)
+        self.regions = {k: np.unique(np.asarray(v, dtype=np.int64)) for k, v in self.regions.items()}
+        self.landmarks = {k: int(v) for k, v in self.landmarks.items()}
+        if self.colors is not None:
+            self.colors = np.asarray(self.colors, dtype=np.float64).reshape(-1, 3)
+        n = len(self.vertices)
+        for name, idx in [("quads", self.quads), ("tris", self.tris)]:
+            if idx.size and (idx.min() < 0 or idx.max() >= n):
+                raise ValueError(f"{name} index out of range for {n} vertices")
+
+    @property
+    def n_vertices(self) -> int:
+        return len(self.vertices)
+
+    @property
+    def triangles(self) -> np.ndarray:
+        """(2Q + T, 3) int64: the quads split (see :func:`split_quads`), then ``tris``."""
+        return np.concatenate([split_quads(self.quads), self.tris])
+
+    def region(self, name: str) -> np.ndarray:
+        """Vertex indices of region ``name`` (InputError with a hint if unknown)."""
+        from visemeface.errors import close_matches
+        try:
+            return self.regions[name]
+        except KeyError:
+            raise InputError(f"unknown region {name!r}" + close_matches(name, self.regions)) from None
+
+    def landmark_position(self, name: str, vertices: np.ndarray | None = None) -> np.ndarray:
+        """Position of landmark ``name`` in ``vertices`` (rest positions if None)."""
+        from visemeface.errors import close_matches
+        if name not in self.landmarks:
+            raise InputError(f"unknown landmark {name!r}" + close_matches(name, self.landmarks))
+        v = self.vertices if vertices is None else vertices
+        return np.asarray(v[self.landmarks[name]], dtype=np.float64)
+
+    def vertex_normals(self, vertices: np.ndarray | None = None) -> np.ndarray:
+        """Unit vertex normals of ``vertices`` (rest positions if None)."""
+        return vertex_normals(self.vertices if vertices is None else vertices, self.triangles)
+
+    def vertex_colors(self) -> np.ndarray:
+        """(N, 3) float32 display colours: skin, redder lips, dark mouth cavity, pale eyes.
+
+        The mesh's own ``colors`` when it has them, otherwise derived from the
+        ``upper_lip``/``lower_lip``, ``eyes`` and ``mouth_cavity`` regions.
+        """
+        if self.colors is not None:
+            return self.colors.astype(np.float32)
+        c = np.tile(SKIN, (self.n_vertices, 1))
+        for name, colour in [("upper_lip", LIP), ("lower_lip", LIP), ("eyes", EYE),
+                             ("mouth_cavity", CAVITY)]:
+            if name in self.regions:
+                c[self.regions[name]] = colour
+        return c.astype(np.float32)
+
+    def boundary_edges(self) -> np.ndarray:
+        """(E, 2) vertex pairs of edges used by exactly one triangle/quad side."""
+        tri = self.triangles
+        # Quad diagonals are interior to a quad, so count quad sides and extra tris' sides only.
+        q = self.quads
+        edges = [q[:, [0, 1]], q[:, [1, 2]], q[:, [2, 3]], q[:, [3, 0]],
+                 self.tris[:, [0, 1]], self.tris[:, [1, 2]], self.tris[:, [2, 0]]]
+        e = np.concatenate(edges)
+        key = np.sort(e, axis=1)
+        uniq, counts = np.unique(key, axis=0, return_counts=True)
+        del tri
+        return uniq[counts == 1]
+
+    # ------------------------------------------------------------------ files
+    def sidecar(self) -> dict:
+        """The JSON-able landmarks/regions/quads record written beside the mesh."""
+        return {
+            "format": "visemeface-landmarks",
+            "version": 1,
+            "landmarks": dict(self.landmarks),
+            "regions": {k: v.tolist() for k, v in self.regions.items()},
+            "quads": self.quads.tolist(),
+            "n_vertices": self.n_vertices,
+        }
+
+    def to_trimesh(self):
+        """A ``trimesh.Trimesh`` (process=False keeps vertex order) with vertex colours."""
+        import trimesh
+        rgba = np.concatenate([np.clip(self.vertex_colors(), 0, 1) * 255,
+                               np.full((self.n_vertices, 1), 255)], axis=1).round().astype(np.uint8)
+        return trimesh.Trimesh(self.vertices, self.triangles, vertex_colors=rgba, process=False)
+
+    def save(self, path: str | Path, force: bool = False) -> tuple[Path, Path]:
+        """Write the surface (format by suffix: .obj .ply .glb .gltf) and its sidecar.
+
+        Both files go through :func:`visemeface.outputs.atomic_output`; nothing is
+        overwritten unless ``force``. Returns ``(mesh_path, sidecar_path)``.
+        """
+        path = Path(path)
+        suffix = path.suffix.lower()
+        if suffix not in MESH_SUFFIXES:
+            raise InputError(f"unknown mesh format {path.suffix!r} (use one of {', '.join(MESH_SUFFIXES)})",
+                             path)
+        side = sidecar_path(path)
+        tm = self.to_trimesh()
+        # Check both targets before writing either, so a refusal leaves no half pair.
+        from visemeface.outputs import check_new
+        check_new(path, force)
+        check_new(side, force)
+        with atomic_output(path, force) as tmp:
+            if suffix == ".obj":
+                data = tm.export(file_type="obj", include_color=True, include_normals=False,
+                                 include_texture=False)
+                tmp.write_text(data)
+            elif suffix == ".gltf":
+                # A .gltf with embedded buffers keeps the pair to two files.
+                data = tm.export(file_type="gltf", embed_buffers=True)
+                name = next(iter(data))
+                tmp.write_bytes(data[name])
+            else:
+                tmp.write_bytes(tm.export(file_type=suffix[1:]))
+        with atomic_output(side, force) as tmp:
+            tmp.write_text(json.dumps(self.sidecar(), separators=(",", ":")))
+        return path, side
+
+
+def _read_surface(path: Path):
+    """(vertices, triangles, colours or None) from a mesh file via trimesh."""
+    import trimesh
+    if not path.exists():
+        raise InputError("mesh file not found", path)
+    if path.suffix.lower() not in MESH_SUFFIXES:
+        raise InputError(f"unknown mesh format {path.suffix!r} (use one of {', '.join(MESH_SUFFIXES)})",
+                         path)
+    try:
+        loaded = trimesh.load(path, process=False, maintain_order=True,
+                              skip_materials=True)
+        if isinstance(loaded, trimesh.Scene):
+            geoms = [g for g in loaded.geometry.values() if isinstance(g, trimesh.Trimesh)]
+            if not geoms:
+                raise ValueError("no triangle mesh in the scene")
+            loaded = geoms[0] if len(geoms) == 1 else trimesh.util.concatenate(geoms)
+    except InputError:
+        raise
+    except Exception as exc:  # trimesh raises many types for broken files
+        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise InputError(f"cannot read mesh: {msg}", path) from None
+    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.vertices) == 0 or len(loaded.faces) == 0:
+        raise InputError("cannot read mesh: no vertices or faces", path)
+    colours = None
+    try:
+        if loaded.visual.kind == "vertex":
+            colours = np.asarray(loaded.visual.vertex_colors, dtype=np.float64)[:, :3] / 255.0
+    except Exception:
+        colours = None
+    return (np.asarray(loaded.vertices, dtype=np.float64),
+            np.asarray(loaded.faces, dtype=np.int64), colours)
+
+
+def _read_sidecar(path: Path, vertices: np.ndarray) -> tuple[dict, dict, np.ndarray | None]:
+    """Parse and validate a landmarks sidecar against ``vertices``."""
+    if not path.exists():
+        raise InputError("landmarks file not found", path)
+    text = path.read_text(encoding="utf-8", errors="replace")
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InputError(f"not valid JSON: {exc.msg} (column {exc.colno})", path, exc.lineno) from None
+    if not isinstance(data, dict) or "landmarks" not in data:
+        raise InputError("expected a JSON object with a 'landmarks' entry", path)
+    n = len(vertices)
+    lms_in = data["landmarks"]
+    if not isinstance(lms_in, dict):
+        raise InputError("'landmarks' must map names to vertex indices or [x, y, z]", path)
+    landmarks = {}
+    for name, value in lms_in.items():
+        if isinstance(value, bool):
+            raise InputError(f"landmark {name!r}: expected a vertex index or [x, y, z], got {value!r}", path)
+        if isinstance(value, int):
+            if not 0 <= value < n:
+                raise InputError(f"landmark {name!r}: vertex index {value} out of range (mesh has {n} vertices)",
+                                 path)
+            landmarks[name] = value
+        elif (isinstance(value, list) and len(value) == 3
+              and all(isinstance(c, (int, float)) and not isinstance(c, bool) for c in value)
+              and np.all(np.isfinite(value))):
+            landmarks[name] = int(np.argmin(np.sum((vertices - np.asarray(value, float)) ** 2, axis=1)))
+        else:
+            raise InputError(f"landmark {name!r}: expected a vertex index or [x, y, z], got {value!r}", path)
+    regions = {}
+    regions_in = data.get("regions", {})
+    if not isinstance(regions_in, dict):
+        raise InputError("'regions' must map names to lists of vertex indices", path)
+    for name, idx in regions_in.items():
+        try:
+            arr = np.asarray(idx, dtype=np.int64).reshape(-1)
+        except (TypeError, ValueError):
+            raise InputError(f"region {name!r}: expected a list of vertex indices", path) from None
+        if arr.size and (arr.min() < 0 or arr.max() >= n):
+            raise InputError(f"region {name!r}: vertex index out of range (mesh has {n} vertices)", path)
+        regions[name] = arr
+    quads = None
+    if "quads" in data:
+        try:
+            quads = np.asarray(data["quads"], dtype=np.int64).reshape(-1, 4)
+        except (TypeError, ValueError):
+            raise InputError("'quads' must be a list of [a, b, c, d] vertex indices", path) from None
+        if quads.size and (quads.min() < 0 or quads.max() >= n):
+            raise InputError(f"'quads': vertex index out of range (mesh has {n} vertices)", path)
+    if "n_vertices" in data and data["n_vertices"] != n:
+        raise InputError(f"written for a mesh of {data['n_vertices']} vertices, the mesh has {n}", path)
+    return landmarks, regions, quads
+
+
+def load_face(path: str | Path, landmarks_path: str | Path | None = None) -> FaceMesh:
+    """Read a face surface and its landmarks sidecar.
+
+    Parameters
+    ----------
+    path : str or Path
+        OBJ, PLY, GLB or glTF file (read with trimesh, vertex order kept).
+    landmarks_path : str or Path, optional
+        The JSON sidecar; default ``<stem>.landmarks.json`` beside ``path``.
+
+    Returns
+    -------
+    FaceMesh
+        With the sidecar's quads when the file's triangles are exactly those
+        quads split (then any further triangles become ``tris``); otherwise all
+        triangles are ``tris`` and there are no quads.
+
+    Raises
+    ------
+    InputError
+        Missing or unreadable mesh or sidecar, or indices out of range; the
+        message names the file.
+    """
+    path = Path(path)
+    vertices, faces, colours = _read_surface(path)
+    side = sidecar_path(path) if landmarks_path is None else Path(landmarks_path)
+    if landmarks_path is None and not side.exists():
+        raise InputError(f"landmarks file not found (expected {side.name} beside the mesh; "
+                         "give one with --landmarks)", side)
+    landmarks, regions, quads = _read_sidecar(side, vertices)
+    tris = faces
+    if quads is not None and len(quads):
+        split = split_quads(quads)
+        if len(faces) >= len(split) and np.array_equal(_canon(faces[:len(split)]), _canon(split)):
+            tris = faces[len(split):]
+        else:
+            quads = None
+    if quads is None:
+        quads = np.zeros((0, 4), np.int64)
+    return FaceMesh(vertices, quads, tris, regions, landmarks, colours)
+
+
+def _canon(tris: np.ndarray) -> np.ndarray:
+    """Rotate each triangle so its smallest index comes first (same orientation)."""
+    k = np.argmin(tris, axis=1)
+    idx = (k[:, None] + np.arange(3)[None, :]) % 3
+    return np.take_along_axis(tris, idx, axis=1)

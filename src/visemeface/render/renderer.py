@@ -1,0 +1,346 @@
+r"""Headless OpenGL rendering of a face (moderngl, EGL, Mesa llvmpipe: no display, no GPU).
+
+One :class:`Renderer` keeps one GL context, one vertex buffer (positions and
+normals, rewritten with ``vbo.write`` each frame), a static colour buffer and
+an index buffer. Each frame recomputes smooth vertex normals from the posed
+positions (:class:`visemeface.face.mesh.NormalAccumulator`), draws into a
+multisampled framebuffer, resolves it and reads RGB back.
+
+Camera
+------
+Views look at the face from the front (``face``: whole face; ``mouth``: the
+mouth region, for the opening analysis) or from 35° toward the subject's left
+(``three-quarter``). Perspective cameras use a vertical field of view of
+:math:`\theta = 18°` at distance :math:`d = r / \tan(\theta/2)` for a framed
+half-height :math:`r`; orthographic ones frame the same half-height. Pixel
+coordinates of a point :math:`p`: :math:`c = P V p`, :math:`u = (c_x/c_w + 1)
+W/2`, :math:`v = (1 - c_y/c_w) H/2` (row 0 at the top).
+
+Shading
+-------
+Two directional lights and ambient, Lambert diffuse plus a weak Blinn–Phong
+highlight, both sides lit (back faces use the flipped normal), on a dark
+background; the colours come from :meth:`FaceMesh.vertex_colors`, so the
+mouth cavity renders dark.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from visemeface.errors import InputError
+from visemeface.face.mesh import FaceMesh, NormalAccumulator
+
+VIEWS = ("face", "mouth", "three-quarter")
+PROJECTIONS = ("perspective", "orthographic")
+BACKGROUND = (0.045, 0.047, 0.06)
+FOV_Y_DEG = 18.0
+THREE_QUARTER_DEG = 35.0
+
+_VERTEX_SHADER = """
+#version 330
+uniform mat4 u_mvp;
+uniform mat4 u_view;
+in vec3 in_pos;
+in vec3 in_normal;
+in vec3 in_color;
+out vec3 v_normal;
+out vec3 v_color;
+out vec3 v_view_pos;
+void main() {
+    gl_Position = u_mvp * vec4(in_pos, 1.0);
+    v_normal = mat3(u_view) * in_normal;
+    v_view_pos = (u_view * vec4(in_pos, 1.0)).xyz;
+    v_color = in_color;
+}
+"""
+
+_FRAGMENT_SHADER = """
+#version 330
+in vec3 v_normal;
+in vec3 v_color;
+in vec3 v_view_pos;
+out vec4 f_color;
+void main() {
+    vec3 n = normalize(v_normal);
+    if (!gl_FrontFacing) n = -n;
+    vec3 view_dir = normalize(-v_view_pos);
+    // key light from the upper left of the camera, fill from the right, in eye space
+    vec3 key = normalize(vec3(-0.45, 0.55, 0.75));
+    vec3 fill = normalize(vec3(0.6, 0.1, 0.6));
+    float diff = 0.72 * max(dot(n, key), 0.0) + 0.25 * max(dot(n, fill), 0.0);
+    float spec = pow(max(dot(n, normalize(key + view_dir)), 0.0), 28.0);
+    vec3 c = v_color * (0.30 + diff) + 0.07 * spec * vec3(1.0, 0.97, 0.94) * length(v_color);
+    f_color = vec4(pow(clamp(c, 0.0, 1.0), vec3(1.0 / 1.15)), 1.0);
+}
+"""
+
+
+def _look_at(eye, target, up=(0.0, 1.0, 0.0)) -> np.ndarray:
+    eye, target, up = (np.asarray(a, dtype=np.float64) for a in (eye, target, up))
+    f = target - eye
+    f /= np.linalg.norm(f)
+    s = np.cross(f, up)
+    s /= np.linalg.norm(s)
+    u = np.cross(s, f)
+    m = np.eye(4)
+    m[0, :3], m[1, :3], m[2, :3] = s, u, -f
+    m[:3, 3] = -m[:3, :3] @ eye
+    return m
+
+
+def _perspective(fov_y, aspect, near, far) -> np.ndarray:
+    f = 1.0 / math.tan(fov_y / 2)
+    m = np.zeros((4, 4))
+    m[0, 0], m[1, 1] = f / aspect, f
+    m[2, 2] = (far + near) / (near - far)
+    m[2, 3] = 2 * far * near / (near - far)
+    m[3, 2] = -1.0
+    return m
+
+
+def _orthographic(half_w, half_h, near, far) -> np.ndarray:
+    m = np.eye(4)
+    m[0, 0], m[1, 1] = 1 / half_w, 1 / half_h
+    m[2, 2] = -2 / (far - near)
+    m[2, 3] = -(far + near) / (far - near)
+    return m
+
+
+def _check_size(size) -> tuple[int, int]:
+    try:
+        w, h = (int(size), int(size)) if np.isscalar(size) else (int(size[0]), int(size[1]))
+    except (TypeError, ValueError, IndexError):
+        raise InputError(f"size must be an integer or (width, height), got {size!r}") from None
+    for v in (w, h):
+        if v < 16 or v > 4096 or v % 16:
+            raise InputError(f"frame size must be a multiple of 16 from 16 to 4096, got {w}x{h}")
+    return w, h
+
+
+class Renderer:
+    """Offscreen renderer for one face topology.
+
+    Parameters
+    ----------
+    face : FaceMesh
+        Topology, colours, rest positions and landmarks (the mouth corners and
+        lip landmarks frame the ``mouth`` view and :meth:`mouth_box`).
+    size : int or (int, int)
+        Frame (width, height) in pixels, each a multiple of 16.
+    view : {"face", "mouth", "three-quarter"}
+    projection : {"perspective", "orthographic"}
+    samples : int
+        MSAA samples (clamped to what the driver offers; 0 disables).
+
+    Examples
+    --------
+    >>> from visemeface.face.procedural import default_face
+    >>> r = Renderer(default_face(), size=256)
+    >>> r.render().shape
+    (256, 256, 3)
+    """
+
+    def __init__(self, face: FaceMesh, size=(512, 512), view: str = "face",
+                 projection: str = "perspective", samples: int = 4):
+        from visemeface.errors import close_matches
+        if view not in VIEWS:
+            raise InputError(f"unknown view {view!r}{close_matches(view, VIEWS)}; choose from {', '.join(VIEWS)}")
+        if projection not in PROJECTIONS:
+            raise InputError(f"unknown projection {projection!r}{close_matches(projection, PROJECTIONS)}; "
+                             f"choose from {', '.join(PROJECTIONS)}")
+        self.face = face
+        self.size = _check_size(size)
+        self.view = view
+        self.projection = projection
+        self._triangles = np.ascontiguousarray(face.triangles, dtype=np.int32)
+        self._normals = NormalAccumulator(face.triangles, face.n_vertices)
+        self._setup_camera()
+        self._setup_gl(samples)
+
+    # ------------------------------------------------------------ camera
+    def _setup_camera(self):
+        face = self.face
+        v = face.vertices
+        keep = np.ones(len(v), bool)
+        if "mouth_cavity" in face.regions:
+            keep[face.regions["mouth_cavity"]] = False
+        w, h = self.size
+        aspect = w / h
+        lm = face.landmarks
+        if self.view == "mouth" and {"mouth_corner_left", "mouth_corner_right"} <= lm.keys():
+            cl, cr = v[lm["mouth_corner_left"]], v[lm["mouth_corner_right"]]
+            width = np.linalg.norm(cl - cr)
+            target = 0.5 * (cl + cr)
+            lip = [lm[k] for k in ("upper_lip_mid", "lower_lip_mid") if k in lm]
+            if lip:
+                target = target.copy()
+                target[2] = v[lip, 2].mean()
+            # the mouth with about a third of its width as margin on each side
+            half_h = max(0.8 * width / aspect, 0.45 * width)
+        else:
+            pts = v[keep]
+            lo, hi = pts.min(0), pts.max(0)
+            target = 0.5 * (lo + hi)
+            target[2] = hi[2] - 0.35 * (hi[2] - lo[2])
+            half_h = 0.53 * max(hi[1] - lo[1], (hi[0] - lo[0]) / aspect)
+        self._target = np.asarray(target, float)
+        self._half_h = float(half_h)
+        fov = math.radians(FOV_Y_DEG)
+        dist = half_h / math.tan(fov / 2)
+        yaw = math.radians(THREE_QUARTER_DEG) if self.view == "three-quarter" else 0.0
+        direction = np.array([math.sin(yaw), 0.0, math.cos(yaw)])
+        eye = self._target + dist * direction
+        self._eye = eye
+        self.view_matrix = _look_at(eye, self._target)
+        extent = float(np.linalg.norm(v.max(0) - v.min(0)))
+        near, far = max(dist - 2 * extent, 1e-3), dist + 2 * extent
+        if self.projection == "perspective":
+            self.projection_matrix = _perspective(fov, aspect, near, far)
+        else:
+            self.projection_matrix = _orthographic(half_h * aspect, half_h, near, far)
+        self.mvp = self.projection_matrix @ self.view_matrix
+
+    def project(self, points: np.ndarray) -> np.ndarray:
+        """Pixel coordinates (u right, v down; (0, 0) the top-left pixel corner) of 3-D points."""
+        p = np.atleast_2d(np.asarray(points, dtype=np.float64))
+        c = np.concatenate([p, np.ones((len(p), 1))], 1) @ self.mvp.T
+        ndc = c[:, :3] / c[:, 3:4]
+        w, h = self.size
+        return np.stack([(ndc[:, 0] + 1) * w / 2, (1 - ndc[:, 1]) * h / 2], 1)
+
+    def mouth_box(self) -> tuple[int, int, int, int]:
+        """Pixel box (x, y, w, h) of the rest mouth.
+
+        ``x`` and ``w`` span the two mouth corners (``w`` is the natural mouth
+        width in pixels that seed 001 normalises by); ``y`` and ``h`` span the
+        rest lips from ``upper_lip_top`` to ``lower_lip_bottom`` when those
+        landmarks exist, else the corners' own rows.
+        """
+        lm = self.face.landmarks
+        try:
+            names = ["mouth_corner_left", "mouth_corner_right"]
+            pts = self.project(self.face.vertices[[lm[n] for n in names]])
+        except KeyError:
+            raise InputError("the face has no mouth_corner_left/mouth_corner_right landmarks") from None
+        ys = pts[:, 1]
+        extra = [lm[k] for k in ("upper_lip_top", "lower_lip_bottom") if k in lm]
+        if extra:
+            ys = np.concatenate([ys, self.project(self.face.vertices[extra])[:, 1]])
+        x0, x1 = pts[:, 0].min(), pts[:, 0].max()
+        y0, y1 = ys.min(), ys.max()
+        return (int(math.floor(x0)), int(math.floor(y0)),
+                int(round(x1 - x0)), max(1, int(round(y1 - y0))))
+
+    def camera_info(self) -> dict:
+        """JSON-able description of the camera (for an analysis sidecar)."""
+        lm = self.face.landmarks
+        info = {
+            "view": self.view,
+            "projection": self.projection,
+            "size": list(self.size),
+            "fov_y_deg": FOV_Y_DEG if self.projection == "perspective" else None,
+            "eye": self._eye.tolist(),
+            "target": self._target.tolist(),
+            "view_matrix": self.view_matrix.tolist(),
+            "projection_matrix": self.projection_matrix.tolist(),
+        }
+        if {"mouth_corner_left", "mouth_corner_right"} <= lm.keys():
+            box = self.mouth_box()
+            corners = self.project(self.face.vertices[[lm["mouth_corner_right"], lm["mouth_corner_left"]]])
+            info["mouth_box"] = list(box)
+            info["mouth_width_px"] = float(np.linalg.norm(corners[1] - corners[0]))
+            info["mouth_corners_px"] = corners.tolist()
+        return info
+
+    # ------------------------------------------------------------ GL
+    def _setup_gl(self, samples):
+        import moderngl
+        try:
+            self.ctx = moderngl.create_context(standalone=True, backend="egl")
+        except Exception as exc:  # no EGL: say so on one line
+            raise RuntimeError(f"cannot create a headless OpenGL (EGL) context: {exc}") from None
+        ctx = self.ctx
+        self.program = ctx.program(vertex_shader=_VERTEX_SHADER, fragment_shader=_FRAGMENT_SHADER)
+        self.program["u_mvp"].write(self.mvp.T.astype("f4").tobytes())
+        self.program["u_view"].write(self.view_matrix.T.astype("f4").tobytes())
+        n = self.face.n_vertices
+        self._vbo_data = np.empty((n, 6), dtype="f4")
+        self.vbo = ctx.buffer(reserve=self._vbo_data.nbytes, dynamic=True)
+        self.cbo = ctx.buffer(np.ascontiguousarray(self.face.vertex_colors(), dtype="f4").tobytes())
+        self.ibo = ctx.buffer(self._triangles.tobytes())
+        self.vao = ctx.vertex_array(
+            self.program,
+            [(self.vbo, "3f 3f", "in_pos", "in_normal"), (self.cbo, "3f", "in_color")],
+            index_buffer=self.ibo, index_element_size=4)
+        w, h = self.size
+        samples = int(min(max(samples, 0), ctx.max_samples))
+        self.samples = samples
+        self.fbo = ctx.framebuffer(color_attachments=[ctx.renderbuffer((w, h), 4)],
+                                   depth_attachment=ctx.depth_renderbuffer((w, h)))
+        if samples > 1:
+            self.fbo_ms = ctx.framebuffer(
+                color_attachments=[ctx.renderbuffer((w, h), 4, samples=samples)],
+                depth_attachment=ctx.depth_renderbuffer((w, h), samples=samples))
+        else:
+            self.fbo_ms = self.fbo
+        self._out = np.empty((h, w, 3), dtype=np.uint8)
+
+    def render(self, vertices: np.ndarray | None = None) -> np.ndarray:
+        """Render one frame; returns a new uint8 (H, W, 3) RGB array, row 0 at the top.
+
+        Parameters
+        ----------
+        vertices : (N, 3) array, optional
+            Posed positions of the face's vertices (rest positions if None).
+        """
+        import moderngl
+        v = self.face.vertices if vertices is None else np.asarray(vertices)
+        if v.shape != (self.face.n_vertices, 3):
+            raise InputError(f"vertices must have shape ({self.face.n_vertices}, 3), got {v.shape}")
+        self._vbo_data[:, :3] = v
+        self._vbo_data[:, 3:] = self._normals(v)
+        self.vbo.write(self._vbo_data)
+        ctx = self.ctx
+        self.fbo_ms.use()
+        ctx.enable(moderngl.DEPTH_TEST)
+        ctx.disable(moderngl.CULL_FACE)
+        ctx.clear(*BACKGROUND, 1.0, depth=1.0)
+        self.vao.render(moderngl.TRIANGLES)
+        if self.fbo_ms is not self.fbo:
+            ctx.copy_framebuffer(self.fbo, self.fbo_ms)
+        w, h = self.size
+        raw = np.frombuffer(self.fbo.read(components=3, alignment=1), dtype=np.uint8).reshape(h, w, 3)
+        return raw[::-1].copy()
+
+    def release(self):
+        """Free the GL objects and context (also done when garbage-collected)."""
+        ctx = getattr(self, "ctx", None)
+        if ctx is not None:
+            ctx.release()
+            self.ctx = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.release()
+
+
+def save_png(path: str | Path, image: np.ndarray, force: bool = False) -> Path:
+    """Write an RGB uint8 image as PNG through :func:`visemeface.outputs.atomic_output`."""
+    import cv2
+
+    from visemeface.outputs import atomic_output
+    image = np.asarray(image)
+    if image.dtype != np.uint8 or image.ndim != 3 or image.shape[2] != 3:
+        raise ValueError(f"expected a uint8 (H, W, 3) image, got {image.dtype} {image.shape}")
+    with atomic_output(path, force) as tmp:
+        ok, buf = cv2.imencode(".png", np.ascontiguousarray(image[:, :, ::-1]))
+        if not ok:
+            raise RuntimeError("PNG encoding failed")
+        Path(tmp).write_bytes(buf.tobytes())
+    return Path(path)
