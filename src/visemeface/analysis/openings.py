@@ -343,8 +343,9 @@ def draw_openings(frame: np.ndarray, openings: Openings, box, label: str | None 
     for i, c in enumerate(openings.contours):
         cv2.drawContours(out, [c], -1, (0, 255, 0) if i == 0 else (255, 230, 0), thick, cv2.LINE_AA)
     text = f"openings: {openings.count}" + (f"  {label}" if label else "")
-    scale = max(0.4, box.w / 400)
-    org = (box.x, max(int(14 * scale), box.y - 6))
-    cv2.putText(out, text, org, cv2.FONT_HERSHEY_SIMPLEX, scale, (255, 255, 255), thick + 1, cv2.LINE_AA)
-    cv2.putText(out, text, org, cv2.FONT_HERSHEY_SIMPLEX, scale, (0, 0, 0), thick, cv2.LINE_AA)
+    scale = max(0.35, box.w / 500)
+    (tw, th), base = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, scale, 1)
+    x0, y0 = box.x, max(0, box.y - th - base - 2 * thick - 2)
+    cv2.rectangle(out, (x0, y0), (x0 + tw + 4, y0 + th + base + 4), (255, 255, 255), cv2.FILLED)
+    cv2.putText(out, text, (x0 + 2, y0 + th + 2), cv2.FONT_HERSHEY_SIMPLEX, scale, (0, 0, 0), 1, cv2.LINE_AA)
     return out

@@ -1,0 +1,125 @@
+"""``visemeface analyze``: mouth-opening profile of a video or frame folder (seed 001 §4)."""
+
+from __future__ import annotations
+
+ORDER = 80
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "analyze",
+        help="measure mouth openings frame by frame (count, area, width, height) -> CSV and plots",
+        description="Measure the mouth openings of every frame of a video (MP4/AVI/...) or a folder of "
+        "PNG/JPG frames, the way seed 001 evaluates sticky lips: greyscale, median blur, dark threshold, "
+        "top-level contours. Per frame: number of openings and the largest one's area, width and height, "
+        "normalised by the mouth width (the box width: its left/right edges on the mouth corners; "
+        "area by the width squared), plus frame differences of area and width. The mouth box comes "
+        "from --box, --box-json, or a sidecar <video>.json written by the renderer "
+        '({"mouth_box": [x, y, w, h], "fps": 30, "size": [W, H]}).',
+        epilog="example: visemeface analyze take1.mp4 --box 310,420,400,180 -o take1.csv --plot take1.png "
+        "--overlay take1_overlay",
+    )
+    p.add_argument("input", metavar="VIDEO_OR_DIR", help="video file or folder of .png/.jpg frames")
+    p.add_argument("-o", "--output", required=True, metavar="CSV", help="profile CSV to write")
+    p.add_argument("--box", metavar="X,Y,W,H",
+                   help="mouth box in pixels (origin top-left); X and X+W on the mouth corners at rest")
+    p.add_argument("--box-json", metavar="FILE",
+                   help="sidecar JSON with \"mouth_box\" (default: <input>.json or <input stem>.json if present)")
+    p.add_argument("--fps", type=float, help="frame rate (default: the video's, the sidecar's, or 30 for folders)")
+    p.add_argument("--threshold", default="otsu", metavar="N|otsu",
+                   help="grey level 0-255 at or below which a pixel is mouth opening, or 'otsu' (default)")
+    p.add_argument("--hull", action="store_true", help="use each opening's convex hull (bright reflections)")
+    p.add_argument("--teeth", action="store_true",
+                   help="count bright unsaturated pixels (teeth) touching the opening as opening")
+    p.add_argument("--min-area", type=float, default=5e-4, metavar="F",
+                   help="drop openings smaller than F * mouth_width^2 pixels (default 5e-4)")
+    p.add_argument("--plot", metavar="PNG", help="also plot the profile over time")
+    p.add_argument("--overlay", metavar="DIR", help="write every frame's mouth region with the detected outlines")
+    p.add_argument("--force", action="store_true", help="overwrite existing outputs")
+    p.set_defaults(func=run)
+
+
+def _threshold(text: str):
+    from visemeface.errors import InputError
+
+    if text.strip().lower() == "otsu":
+        return "otsu"
+    try:
+        value = float(text)
+    except ValueError:
+        raise InputError(f"--threshold must be a grey level 0-255 or 'otsu', got {text!r}") from None
+    return value
+
+
+def run(args) -> int:
+    import contextlib
+    from pathlib import Path
+
+    import cv2
+
+    from visemeface.analysis.openings import OpeningDetector, draw_openings
+    from visemeface.analysis.profiles import analyze_frames, plot_profiles, write_profile
+    from visemeface.analysis.video import open_frames, parse_box, read_sidecar, sidecar_path
+    from visemeface.errors import InputError
+    from visemeface.outputs import atomic_dir, check_new, progress
+
+    detector = OpeningDetector(threshold=_threshold(args.threshold), hull=args.hull, teeth=args.teeth,
+                               min_area=args.min_area)
+    side_file = Path(args.box_json) if args.box_json else sidecar_path(args.input)
+    sidecar = read_sidecar(side_file) if side_file else None
+    if args.box is not None:
+        box = parse_box(args.box)
+    elif sidecar is not None:
+        box = sidecar.mouth_box
+    else:
+        raise InputError(f"no mouth box for {args.input}: give --box X,Y,W,H or --box-json FILE "
+                         "(or put a sidecar <input>.json next to it)")
+    outputs = [args.output] + [p for p in (args.plot, args.overlay) if p]
+    if len(set(map(str, outputs))) != len(outputs):
+        raise InputError("the CSV, plot and overlay outputs must be different paths")
+    for out in outputs:
+        check_new(out, args.force)
+
+    fps = args.fps
+    if fps is None and sidecar is not None and Path(args.input).is_dir():
+        fps = sidecar.fps
+    source = open_frames(args.input, fps)
+    if sidecar is not None and args.box is None and sidecar.size and tuple(sidecar.size) != source.size:
+        raise InputError(f"sidecar is for {sidecar.size[0]}x{sidecar.size[1]} frames, the video is "
+                         f"{source.size[0]}x{source.size[1]}", side_file)
+    box.check_inside(*source.size)
+
+    # The overlay shows the mouth box with a margin, like seed 001 Figs. 7-15.
+    mx, my = box.w // 4, box.h // 2
+    x0, y0 = max(0, box.x - mx), max(0, box.y - my)
+    x1, y1 = min(source.size[0], box.x + box.w + mx), min(source.size[1], box.y + box.h + my)
+
+    with contextlib.ExitStack() as stack:
+        on_frame = None
+        if args.overlay:
+            overlay_dir = stack.enter_context(atomic_dir(args.overlay, args.force))
+
+            def on_frame(i, frame, openings):
+                img = draw_openings(frame, openings, box, f"frame {i}")[y0:y1, x0:x1]
+                if not cv2.imwrite(str(overlay_dir / f"frame_{i:05d}.png"), cv2.cvtColor(img, cv2.COLOR_RGB2BGR)):
+                    raise InputError("cannot write overlay frame", overlay_dir)
+
+        frames = progress(source.frames(), total=source.n_frames, desc="analyze")
+        df = analyze_frames(frames, box, source.fps, detector, on_frame, source=str(args.input))
+    write_profile(df, args.output, args.force)
+    if args.plot:
+        plot_profiles({Path(args.input).name: df}, args.plot, title=f"mouth openings: {Path(args.input).name}",
+                      force=args.force)
+
+    n = len(df)
+    multi = int((df["count"] >= 2).sum())
+    jump = df["d_width"].abs()
+    msg = (f"{n} frames at {source.fps:g} fps, mouth width {box.w} px: openings max {int(df['count'].max())}, "
+           f"{multi} frame(s) with 2 or more; max width {df['width'].max():.3f} w, "
+           f"max area {df['area'].max():.4f} w^2")
+    if n > 1 and jump.max() > 0:
+        k = int(jump.idxmax())
+        msg += f"; largest width jump {df['d_width'][k]:+.3f} w at frame {int(df['frame'][k])} ({df['time'][k]:.3f} s)"
+    print(msg)
+    print(f"wrote {args.output}" + "".join(f", {p}" for p in (args.plot, args.overlay) if p))
+    return 0

@@ -1,0 +1,156 @@
+"""`visemeface analyze` and `visemeface compare` end to end on synthetic videos."""
+
+import cv2
+import numpy as np
+import pandas as pd
+import pytest
+
+from visemeface.analysis.synthetic import merging_mouth_frames
+from visemeface.analysis.video import natural_key, open_frames, read_sidecar, write_sidecar
+from visemeface.cli import main
+from visemeface.errors import InputError
+
+BOX = "28,78,200,100"
+N, MERGE = 24, 13
+
+
+@pytest.fixture(scope="module")
+def frames():
+    return list(merging_mouth_frames(N, MERGE, (256, 256)))
+
+
+@pytest.fixture(scope="module")
+def frame_dir(tmp_path_factory, frames):
+    d = tmp_path_factory.mktemp("frames")
+    for i, f in enumerate(frames):        # unpadded names: natural order needed
+        cv2.imwrite(str(d / f"f{i}.png"), cv2.cvtColor(f, cv2.COLOR_RGB2BGR))
+    return d
+
+
+@pytest.fixture(scope="module")
+def video(tmp_path_factory, frames):
+    import imageio_ffmpeg
+    path = tmp_path_factory.mktemp("video") / "take.mp4"
+    w = imageio_ffmpeg.write_frames(str(path), (256, 256), fps=25, codec="libx264", quality=8)
+    w.send(None)
+    for f in frames:
+        w.send(np.ascontiguousarray(f))
+    w.close()
+    write_sidecar(path.parent / "take.mp4.json", (28, 78, 200, 100), fps=25, size=(256, 256))
+    return path
+
+
+def _run(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def _assert_merge(df, fps):
+    assert len(df) == N
+    assert list(df["count"]) == [2] * MERGE + [1] * (N - MERGE)
+    assert int(df["d_width"].abs().idxmax()) == MERGE
+    np.testing.assert_allclose(df["time"], np.arange(N) / fps, atol=1e-6)
+
+
+def test_analyze_frame_folder_with_plot_and_overlay(tmp_path, capsys, frame_dir):
+    csv, png, ov = tmp_path / "p.csv", tmp_path / "p.png", tmp_path / "ov"
+    code, out, err = _run(capsys, "analyze", frame_dir, "--box", BOX, "-o", csv, "--plot", png, "--overlay", ov)
+    assert code == 0, err
+    _assert_merge(pd.read_csv(csv), 30)
+    assert f"at frame {MERGE}" in out
+    assert png.stat().st_size > 10_000
+    overlays = sorted(ov.iterdir())
+    assert len(overlays) == N
+    img = cv2.imread(str(overlays[0]))
+    green = (img[..., 1] > 200) & (img[..., 0] < 80) & (img[..., 2] < 80)     # the largest outline
+    assert green.sum() > 50
+
+
+def test_analyze_mp4_with_sidecar(tmp_path, capsys, video):
+    csv = tmp_path / "m.csv"
+    code, out, err = _run(capsys, "analyze", video, "-o", csv, "--hull", "--teeth")
+    assert code == 0, err
+    _assert_merge(pd.read_csv(csv), 25)                  # fps from the video, box from take.mp4.json
+    assert "25 fps" in out
+
+
+def test_output_is_deterministic_and_needs_force(tmp_path, capsys, frame_dir):
+    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
+    assert _run(capsys, "analyze", frame_dir, "--box", BOX, "-o", a)[0] == 0
+    assert _run(capsys, "analyze", frame_dir, "--box", BOX, "-o", b, "--fps", 30)[0] == 0
+    assert a.read_bytes() == b.read_bytes()
+    code, _, err = _run(capsys, "analyze", frame_dir, "--box", BOX, "-o", a)
+    assert code == 2 and "exists" in err
+    assert _run(capsys, "analyze", frame_dir, "--box", BOX, "-o", a, "--force", "--threshold", "70")[0] == 0
+
+
+def test_compare_prints_l2_and_plots(tmp_path, capsys, frame_dir, video):
+    a, b, png = tmp_path / "a.csv", tmp_path / "b.csv", tmp_path / "c.png"
+    _run(capsys, "analyze", frame_dir, "--box", BOX, "-o", a)
+    _run(capsys, "analyze", video, "-o", b)
+    code, out, err = _run(capsys, "compare", a, a, b, "--plot", png)
+    assert code == 0, err
+    lines = out.splitlines()
+    assert lines[0].split() == ["area", "width", "height"]
+    same = [float(v) for v in lines[1].split()[-3:]]
+    other = [float(v) for v in lines[2].split()[-3:]]
+    assert same == [0.0, 0.0, 0.0]
+    assert other[1] > 0.3                  # merges at 13/30 s vs 13/25 s: width differs
+    assert png.stat().st_size > 10_000
+
+
+def _error(capsys, *argv):
+    code, out, err = _run(capsys, *argv)
+    assert code == 2
+    assert err.startswith("visemeface: error: ") and err.count("\n") == 1
+    return err
+
+
+def test_bad_inputs_exit_2_with_one_line(tmp_path, capsys, frame_dir):
+    out = tmp_path / "x.csv"
+    bad = tmp_path / "bad.mp4"
+    bad.write_bytes(np.random.default_rng(0).integers(0, 256, 4000, dtype=np.uint8).tobytes())
+    assert "cannot read video" in _error(capsys, "analyze", bad, "--box", BOX, "-o", out)
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert "no .png/.jpg frames" in _error(capsys, "analyze", empty, "--box", BOX, "-o", out)
+    assert "outside the 256x256 frame" in _error(capsys, "analyze", frame_dir, "--box", "100,100,200,100", "-o", out)
+    assert "4 numbers" in _error(capsys, "analyze", frame_dir, "--box", "1,2,three,4", "-o", out)
+    assert "no mouth box" in _error(capsys, "analyze", frame_dir, "-o", out)
+    assert "no such file" in _error(capsys, "analyze", tmp_path / "none.mp4", "--box", BOX, "-o", out)
+    assert "--threshold" in _error(capsys, "analyze", frame_dir, "--box", BOX, "-o", out, "--threshold", "dark")
+    side = tmp_path / "side.json"
+    side.write_text('{"mouth_box": [1, 2, 3]}')
+    assert "side.json" in _error(capsys, "analyze", frame_dir, "--box-json", side, "-o", out)
+    side.write_text('{"mouth_box": [28, 78, 200, 100], "size": [512, 512]}')
+    assert "512x512" in _error(capsys, "analyze", frame_dir, "--box-json", side, "-o", out)
+    assert not out.exists()
+    assert "not a profile CSV" in _error(capsys, "compare", bad, bad)
+
+
+def test_mismatched_frame_size_in_folder(tmp_path, capsys, frames):
+    d = tmp_path / "mixed"
+    d.mkdir()
+    cv2.imwrite(str(d / "a1.png"), frames[0])
+    cv2.imwrite(str(d / "a2.png"), frames[0][:128])
+    assert "a2.png" in _error(capsys, "analyze", d, "--box", BOX, "-o", tmp_path / "o.csv")
+    assert not (tmp_path / "o.csv").exists()
+
+
+def test_sidecar_round_trip_and_errors(tmp_path):
+    p = tmp_path / "v.json"
+    write_sidecar(p, (10, 20, 300, 120), fps=50, size=(640, 480))
+    s = read_sidecar(p)
+    assert (s.mouth_box.x, s.mouth_box.y, s.mouth_box.w, s.mouth_box.h) == (10, 20, 300, 120)
+    assert s.fps == 50 and s.size == (640, 480)
+    p.write_text('{"mouth_box": [10, 20, 300, 120],\n "fps": }')
+    with pytest.raises(InputError, match=r"v.json:2: not valid JSON"):
+        read_sidecar(p)
+
+
+def test_folder_order_is_natural(frame_dir):
+    src = open_frames(frame_dir, fps=12)
+    assert [f.name for f in src.files][:3] == ["f0.png", "f1.png", "f2.png"]
+    assert src.files[10].name == "f10.png" and src.fps == 12 and src.size == (256, 256)
+    assert sorted(["f10", "f9", "F1"], key=natural_key) == ["F1", "f9", "f10"]
