@@ -86,16 +86,27 @@ class NormalAccumulator:
                          {\lVert \sum_{t \ni i} (b_t - a_t) \times (c_t - a_t) \rVert},
 
     computed as one sparse product ``S @ N_faces`` with the vertex-triangle
-    incidence matrix ``S`` built once.
+    incidence matrix ``S`` built once. With ``groups`` (an int per vertex; a
+    triangle belongs to the largest group among its vertices) a vertex sums
+    only the triangles of its own group, when it has any.
     """
 
-    def __init__(self, triangles: np.ndarray, n_vertices: int):
+    def __init__(self, triangles: np.ndarray, n_vertices: int, groups: np.ndarray | None = None):
         self.triangles = np.ascontiguousarray(triangles, dtype=np.int64)
         t = len(self.triangles)
         rows = self.triangles.ravel()
         cols = np.repeat(np.arange(t), 3)
-        self._incidence = scipy.sparse.csr_matrix(
-            (np.ones(3 * t), (rows, cols)), shape=(n_vertices, t))
+        weight = np.ones(3 * t)
+        if groups is not None:
+            # smoothing groups: a vertex averages only the triangles of its own group
+            # (when it has any), so e.g. the dark mouth cavity does not bend the normals
+            # of the lip seam it hangs from.
+            groups = np.asarray(groups)
+            tri_group = groups[self.triangles].max(axis=1)
+            same = groups[rows] == np.repeat(tri_group, 3)
+            has_own = np.bincount(rows[same], minlength=n_vertices) > 0
+            weight = np.where(same | ~has_own[rows], 1.0, 0.0)
+        self._incidence = scipy.sparse.csr_matrix((weight, (rows, cols)), shape=(n_vertices, t))
 
     def __call__(self, vertices: np.ndarray) -> np.ndarray:
         n = self._incidence @ face_normals(vertices, self.triangles)
@@ -173,9 +184,17 @@ class FaceMesh:
         v = self.vertices if vertices is None else vertices
         return np.asarray(v[self.landmarks[name]], dtype=np.float64)
 
+    def shading_groups(self) -> np.ndarray:
+        """Per-vertex smoothing group: 1 for the mouth cavity, 0 elsewhere."""
+        g = np.zeros(self.n_vertices, np.int8)
+        if "mouth_cavity" in self.regions:
+            g[self.regions["mouth_cavity"]] = 1
+        return g
+
     def vertex_normals(self, vertices: np.ndarray | None = None) -> np.ndarray:
-        """Unit vertex normals of ``vertices`` (rest positions if None)."""
-        return vertex_normals(self.vertices if vertices is None else vertices, self.triangles)
+        """Unit vertex normals of ``vertices`` (rest positions if None), by smoothing group."""
+        acc = NormalAccumulator(self.triangles, self.n_vertices, self.shading_groups())
+        return acc(self.vertices if vertices is None else vertices)
 
     def vertex_colors(self) -> np.ndarray:
         """(N, 3) float32 display colours: skin, redder lips, dark mouth cavity, pale eyes.

@@ -50,7 +50,7 @@ DEFAULT_RESOLUTION = 4500
 
 _XC = MOUTH_WIDTH / 2          # mouth corner (pre-wrap arc coordinate)
 _X_END = 0.128                  # lateral rim (arc length from the centre line)
-_Y_BOTTOM, _Y_TOP = -0.088, 0.165
+_Y_BOTTOM, _Y_TOP = -0.082, 0.185
 _Y_SUBNASALE = 0.0185
 _EYE_X, _EYE_Y = 0.0322, 0.066  # eye centre
 _EYE_HALF_W = 0.0135            # half the palpebral fissure width
@@ -95,9 +95,9 @@ def _upper_border(X):
 def _eye_opening(X):
     """(lower, upper) lid offsets from the eye-centre height; open between the canthi."""
     t = np.clip((np.abs(X) - (_EYE_X - _EYE_HALF_W)) / (2 * _EYE_HALF_W), 0, 1)
-    lower = 0.0036 * np.sin(np.pi * t) ** 0.9
+    lower = 0.0043 * np.sin(np.pi * t) ** 0.9
     # the upper lid peaks a little medially of centre
-    upper = 0.0064 * np.sin(np.pi * t ** 0.85) ** 0.8
+    upper = 0.0049 * np.sin(np.pi * t ** 0.85) ** 0.8
     return -(_LID_GAP / 2 + lower), _LID_GAP / 2 + upper
 
 
@@ -119,7 +119,7 @@ def _knots(X):
 
 
 #: Rows per band at resolution scale 1 (bands between consecutive knots).
-_BAND_ROWS = (17, 4, 4, 4, 16, 1, 24)
+_BAND_ROWS = (16, 4, 4, 4, 16, 1, 26)
 _BAND_MIN = (6, 2, 2, 2, 6, 1, 8)
 _SEAM_KNOT = 2
 
@@ -155,11 +155,13 @@ def _relief(X, Y, Yc):
     h += 0.0085 * _gauss((ax / 0.018) ** 2 + ((Y + 0.034) / 0.011) ** 2)
     # nose: dorsum from nasion to tip, tip lobule, columella underside
     t = np.clip((Y - _Y_SUBNASALE) / (0.068 - _Y_SUBNASALE), 0, 1)   # 0 subnasale .. 1 nasion
-    prof = PchipInterpolator([0, 0.07, 0.2, 0.32, 0.6, 1.0],
-                             [0.0, 0.011, 0.0215, 0.0225, 0.0160, 0.0075])(t)
-    width = PchipInterpolator([0, 0.2, 0.32, 0.6, 1.0], [0.0085, 0.0095, 0.0085, 0.0058, 0.0062])(t)
-    on = (Y > _Y_SUBNASALE - 0.003) & (Y < 0.074)
-    nose = prof * _gauss((ax / width) ** 2.4) * on * _smoothstep((0.074 - Y) / 0.008)
+    t = np.clip((Y - _Y_SUBNASALE) / (0.068 - _Y_SUBNASALE), 0, 1.4)
+    prof = PchipInterpolator([0, 0.07, 0.2, 0.32, 0.6, 1.0, 1.2, 1.4],
+                             [0.0, 0.011, 0.0215, 0.0230, 0.0170, 0.0085, 0.0030, 0.0])(t)
+    width = PchipInterpolator([0, 0.2, 0.32, 0.6, 1.0, 1.4],
+                              [0.0085, 0.0095, 0.0085, 0.0060, 0.0068, 0.0090])(t)
+    on = Y > _Y_SUBNASALE - 0.003
+    nose = prof * _gauss((ax / width) ** 2.4) * on
     h += nose
     # alae (nostril wings) and the alar crease around them
     ala = _gauss(((ax - 0.0125) / 0.0062) ** 2 + ((Y - 0.0235) / 0.0062) ** 2)
@@ -189,16 +191,16 @@ def _relief(X, Y, Yc):
 
 
 # ------------------------------------------------------------------ head shape
-_A = PchipInterpolator([-0.10, -0.045, -0.01, 0.03, 0.07, 0.11, 0.17],
-                       [0.047, 0.052, 0.062, 0.071, 0.073, 0.071, 0.066])
+_A = PchipInterpolator([-0.10, -0.045, -0.01, 0.03, 0.07, 0.11, 0.17, 0.21],
+                       [0.050, 0.055, 0.065, 0.074, 0.075, 0.073, 0.068, 0.066])
 
 
 def _wrap(X, Y, h):
     r"""Map arc coordinates and relief to 3-D (see the module docstring)."""
-    a = _A(np.clip(Y, -0.10, 0.17))
+    a = _A(np.clip(Y, -0.10, 0.21))
     b = 1.25 * a
     # sagittal profile: chin curls under below y_m, forehead curls back above y_f
-    y_m = -0.047 + 0.045 * _smoothstep(np.abs(X) / 0.11)
+    y_m = -0.050 + 0.040 * _smoothstep((np.abs(X) - 0.012) / 0.100)
     r_c = 0.020
     d = np.clip(y_m - Y, 0, None)
     y = np.where(d > 0, y_m - r_c * np.sin(np.minimum(d / r_c, np.pi / 2))
@@ -511,15 +513,23 @@ def default_face(resolution: int | None = None, rest_gap: float = 0.0) -> FaceMe
     rosy = 0.35 * _gauss(((ax - 0.045) / 0.016) ** 2 + ((Yv - 0.030) / 0.014) ** 2)
     brow_line = 0.088 + 0.006 * np.sin(np.pi * np.clip((ax - 0.012) / 0.048, 0, 1)) ** 1.5 \
         - 0.002 * (ax / 0.05)
-    brow_w = (_smoothstep(1 - np.abs(Yv - brow_line) / (0.0055 - 0.0025 * np.clip((ax - 0.012) / 0.045, 0, 1)))
+    brow_w = (_smoothstep(1.15 - np.abs(Yv - brow_line) / (0.0062 - 0.0028 * np.clip((ax - 0.012) / 0.045, 0, 1)))
               * _smoothstep((ax - 0.010) / 0.004) * _smoothstep((0.060 - ax) / 0.005))
     nostril_w = _gauss(((ax - 0.0062) / 0.0030) ** 2 + ((Yv - 0.0208) / 0.0022) ** 2)
     g = colours[:n_grid]
     g = g + rosy[:, None] * (np.array([0.84, 0.55, 0.50]) - g)
     g = g + lipw[:, None] * (_LIP - g)
-    g = g + np.clip(brow_w, 0, 1)[:, None] * (_BROW - g)
+    g = g + 0.8 * np.clip(brow_w, 0, 1)[:, None] * (_BROW - g)
+    # lash line along the upper lid margin, a shadowed crease above it
+    upper_margin = np.zeros(n_grid, bool)
+    upper_margin[idx_up[jlid + 1]] = True
+    lash = upper_margin & (np.abs(ax - _EYE_X) <= _EYE_HALF_W + 1e-12)
+    g[lash] = g[lash] + 0.85 * (np.array([0.12, 0.08, 0.07]) - g[lash])
     g = g + np.clip(nostril_w, 0, 1)[:, None] * (_NOSTRIL - g)
     colours[:n_grid] = g
+    # the inner lip line: a darker vermilion along the seam (shows as the closed-lip line)
+    colours[seam_up[1:-1]] *= 0.62
+    colours[seam_lo[1:-1]] *= 0.62
     off = n_grid
     for p in eye_parts:
         colours[off:off + len(p[0])] = p[3]

@@ -157,7 +157,7 @@ class Renderer:
         self.view = view
         self.projection = projection
         self._triangles = np.ascontiguousarray(face.triangles, dtype=np.int32)
-        self._normals = NormalAccumulator(face.triangles, face.n_vertices)
+        self._normals = NormalAccumulator(face.triangles, face.n_vertices, face.shading_groups())
         self._setup_camera()
         self._setup_gl(samples)
 
