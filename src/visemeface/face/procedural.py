@@ -58,7 +58,7 @@ _LID_GAP = 0.0008               # lid band height outside the eye opening
 _L0, _U0 = 0.0105, 0.0082       # lower / upper vermilion heights at the centre
 
 _SKIN = np.array([0.87, 0.67, 0.56])
-_LIP = np.array([0.76, 0.42, 0.42])
+_LIP = np.array([0.78, 0.40, 0.41])
 _BROW = np.array([0.36, 0.25, 0.19])
 _NOSTRIL = np.array([0.30, 0.17, 0.15])
 _SCLERA = np.array([0.93, 0.91, 0.87])
@@ -80,7 +80,9 @@ def _lower_border(X):
     """Height below the seam of the lower vermilion border, :math:`L(X) > 0`."""
     s = np.clip(1 - (np.abs(X) / _XC) ** 2, 0, None)
     L = _L0 * s ** 0.55
-    return np.sqrt(L ** 2 + 0.0022 ** 2)
+    # pinched at the corner, back to a normal band height away from the mouth
+    out = (0.0090 - 0.0022) * _smoothstep((np.abs(X) - _XC) / 0.016)
+    return np.sqrt(L ** 2 + 0.0022 ** 2) + out
 
 
 def _upper_border(X):
@@ -89,22 +91,30 @@ def _upper_border(X):
     s = np.clip(1 - (ax / _XC) ** 2, 0, None)
     bow = 0.0016 * _gauss(((ax - 0.0062) / 0.0042) ** 2) - 0.0006 * _gauss((ax / 0.0025) ** 2)
     U = (_U0 + bow) * s ** 0.5
-    return np.sqrt(U ** 2 + 0.0022 ** 2)
+    out = (0.0080 - 0.0022) * _smoothstep((ax - _XC) / 0.016)
+    return np.sqrt(U ** 2 + 0.0022 ** 2) + out
 
 
-def _eye_opening(X):
-    """(lower, upper) lid offsets from the eye-centre height; open between the canthi."""
-    t = np.clip((np.abs(X) - (_EYE_X - _EYE_HALF_W)) / (2 * _EYE_HALF_W), 0, 1)
+def _eye_opening(X, band=0.003):
+    """(lower, upper) lid offsets from the eye-centre height; open between the canthi.
+
+    Outside the eye the two lid rows part again to an ordinary row spacing
+    ``band``, so no thin crease runs across the face.
+    """
+    ax = np.abs(X)
+    t = np.clip((ax - (_EYE_X - _EYE_HALF_W)) / (2 * _EYE_HALF_W), 0, 1)
     lower = 0.0043 * np.sin(np.pi * t) ** 0.9
     # the upper lid peaks a little medially of centre
     upper = 0.0049 * np.sin(np.pi * t ** 0.85) ** 0.8
-    return -(_LID_GAP / 2 + lower), _LID_GAP / 2 + upper
+    outside = np.clip(np.abs(ax - _EYE_X) - _EYE_HALF_W, 0, None)
+    part = 0.5 * (band - _LID_GAP) * _smoothstep(outside / 0.008)
+    return -(_LID_GAP / 2 + lower + part), _LID_GAP / 2 + upper + part
 
 
-def _knots(X):
+def _knots(X, lid_band=0.003):
     """Row feature curves (bottom to top) at lateral positions ``X``."""
     X = np.asarray(X, dtype=float)
-    lo, up = _eye_opening(X)
+    lo, up = _eye_opening(X, lid_band)
     one = np.ones_like(X)
     return [
         _Y_BOTTOM * one,
@@ -257,15 +267,37 @@ def _eyeball(centre, axes, segments, iris_r, pupil_r, start):
 
 
 # ------------------------------------------------------------------ builder
-def _columns(scale):
-    """Half-row of lateral positions X >= 0; the mouth corner is column ``jc``."""
+def _layout(scale):
+    """Grid sizes at a resolution scale: (jc, half columns, band rows, cavity rows, eye segments)."""
     jc = max(4, int(round(8 * scale)))
-    m = max(8, int(round(22 * scale)))
-    j = np.arange(jc + m + 1)
+    n_half = jc + max(8, int(round(22 * scale)))
+    counts = [max(mn, int(round(n * scale))) if n > 1 else 1 for n, mn in zip(_BAND_ROWS, _BAND_MIN)]
+    n_cav = max(4, int(round(6 * scale)))
+    segments = 4 * max(3, int(round(6 * scale)))
+    return jc, n_half, counts, n_cav, segments
+
+
+def _n_vertices(layout):
+    jc, n_half, counts, n_cav, segments = layout
+    nc, nr = 2 * n_half + 1, sum(counts) + 1
+    return nc * nr + (2 * jc - 1) + (n_cav - 1) * (2 * jc + 1) + 2 * (1 + 10 * segments)
+
+
+def _scale_for(resolution):
+    """The grid scale whose vertex count is closest to ``resolution`` (deterministic search)."""
+    scales = np.geomspace(0.2, 8.0, 400)
+    counts = np.array([_n_vertices(_layout(s)) for s in scales])
+    return float(scales[np.argmin(np.abs(counts - resolution))])
+
+
+def _columns(jc, n_half):
+    """Half-row of lateral positions X >= 0; the mouth corner is column ``jc``."""
+    m = n_half - jc
+    j = np.arange(n_half + 1)
     h = _XC / jc
     alpha = (_X_END - _XC - h * m) / m ** 2
     x = np.where(j <= jc, h * j, _XC + h * (j - jc) + alpha * np.clip(j - jc, 0, None) ** 2)
-    return x, jc
+    return x
 
 
 def _snap_canthi(xh):
@@ -307,18 +339,18 @@ def default_face(resolution: int | None = None, rest_gap: float = 0.0) -> FaceMe
         raise InputError(f"resolution must be an integer from 800 to 200000, got {resolution!r}")
     if not 0.0 <= float(rest_gap) <= 0.01:
         raise InputError(f"rest_gap must be between 0 and 0.01 m, got {rest_gap!r}")
-    scale = np.sqrt(resolution / DEFAULT_RESOLUTION)
+    scale = _scale_for(resolution)
+    jc, n_half, counts, n_cav, segments = _layout(scale)
 
     # ---- columns (exactly mirrored) and rows
-    xh, jc = _columns(scale)
-    xh = _snap_canthi(xh)
+    xh = _snap_canthi(_columns(jc, n_half))
     X = np.concatenate([-xh[:0:-1], xh])
     nc = len(X)
     ic = nc // 2                       # centre column
     icr, icl = ic - jc, ic + jc        # right (-x) and left (+x) mouth corners
-    counts = [max(mn, int(round(n * scale))) if n > 1 else 1 for n, mn in zip(_BAND_ROWS, _BAND_MIN)]
-    knots = _knots(X)
-    knots0 = _knots(np.zeros(1))
+    lid_band = 0.5 * ((_EYE_Y - _Y_SUBNASALE) / counts[4] + (_Y_TOP - _EYE_Y) / counts[6])
+    knots = _knots(X, lid_band)
+    knots0 = _knots(np.zeros(1), lid_band)
     rows_y, rows_yc, band_of_row = [], [], []
     for b, n in enumerate(counts):
         for r in range(n + (1 if b == len(counts) - 1 else 0)):
@@ -404,14 +436,13 @@ def default_face(resolution: int | None = None, rest_gap: float = 0.0) -> FaceMe
         zl = centre[2] + axes[2] * np.sqrt(np.clip(1 - rr ** 2, 0, None))
         V[near, 2] = (1 - w[near]) * V[near, 2] + w[near] * np.maximum(zl[near], V[near, 2] - 0.004)
         t = 0.0012                                # lid thickness over the eyeball
-        ev, eq, et, ecol = _eyeball(centre, (axes[0] - t, axes[1] - t, axes[2] - t), 24,
+        ev, eq, et, ecol = _eyeball(centre, (axes[0] - t, axes[1] - t, axes[2] - t), segments,
                                     0.0058, 0.0022, start)
         eye_parts.append((ev, eq, et, ecol))
         eye_vertex_sets.append(np.arange(start, start + len(ev)))
         start += len(ev)
 
     # ---- mouth cavity: quad strip from the upper seam, up-back, down-back, to the lower seam
-    n_cav = max(4, int(round(6 * scale)))
     slit_cols = np.arange(icr, icl + 1)
     cav_idx = np.empty((n_cav + 1, len(slit_cols)), np.int64)
     cav_idx[0] = idx_up[js, slit_cols]
