@@ -181,7 +181,7 @@ def write_gltf(path, rig, track: pd.DataFrame, force: bool = False,
     times = track.index.to_numpy(dtype=np.float64)
     export.write_morph_animation_glb(path, face.vertices, face.triangles, targets, names, times,
                                      morph_weights(a, rig, samples), colors=face.vertex_colors(),
-                                     force=force)
+                                     normals=face.vertex_normals(), force=force)
 
 
 # --------------------------------------------------------------------------- resumable frames
@@ -408,7 +408,8 @@ def animate(track: pd.DataFrame, rig, out: Outputs, settings: RenderSettings) ->
         if need_image:
             from visemeface.render.renderer import Renderer
 
-            renderer = Renderer(face, size=(settings.size, settings.size), view=settings.view)
+            renderer = stack.enter_context(
+                Renderer(face, size=(settings.size, settings.size), view=settings.view))
         video = obj = pc2 = None
         if out.video is not None:
             video = stack.enter_context(export.VideoWriter(

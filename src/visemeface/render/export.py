@@ -428,26 +428,24 @@ def read_pc2(path) -> tuple[np.ndarray, dict]:
 # --------------------------------------------------------------------------- glTF
 
 
-def vertex_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    r"""Unit area-weighted vertex normals.
-
-    .. math:: n_v = \frac{\sum_{t \ni v} (b_t - a_t) \times (c_t - a_t)}
-                        {\lVert \sum_{t \ni v} (b_t - a_t) \times (c_t - a_t) \rVert}
-
-    (the cross product's length is twice the triangle's area). Vertices in no
-    triangle get ``+z``.
-    """
-    v = np.asarray(vertices, dtype=np.float64)
-    t = np.asarray(triangles, dtype=np.int64)
-    cross = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])
-    n = np.zeros_like(v)
-    for k in range(3):
-        np.add.at(n, t[:, k], cross)
+def unit_normals(normals: np.ndarray) -> np.ndarray:
+    """Normals made exactly unit length as glTF requires; zero rows (a vertex in no
+    triangle) become ``+z``."""
+    n = np.asarray(normals, dtype=np.float64).copy()
     length = np.linalg.norm(n, axis=1)
-    bad = length < 1e-300
+    bad = ~(length > 1e-12)
     n[bad] = (0.0, 0.0, 1.0)
     length[bad] = 1.0
     return n / length[:, None]
+
+
+def vertex_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Unit area-weighted vertex normals (:func:`visemeface.face.mesh.vertex_normals`),
+    ``+z`` for vertices in no triangle."""
+    from visemeface.face.mesh import vertex_normals as area_weighted
+
+    return unit_normals(area_weighted(np.asarray(vertices, dtype=np.float64),
+                                      np.asarray(triangles, dtype=np.int64)))
 
 
 def jaw_sample_weights(values: np.ndarray, samples: np.ndarray) -> np.ndarray:
@@ -547,7 +545,8 @@ def glb_bytes(gltf: dict, binary: bytes) -> bytes:
 def write_morph_animation_glb(path, vertices: np.ndarray, triangles: np.ndarray,
                               targets: np.ndarray, target_names: Sequence[str],
                               times: np.ndarray, weights: np.ndarray,
-                              colors: np.ndarray | None = None, name: str = "face",
+                              colors: np.ndarray | None = None, normals: np.ndarray | None = None,
+                              name: str = "face",
                               force: bool = False) -> None:
     r"""Write a mesh with morph targets and a morph-weight animation as binary glTF 2.0.
 
@@ -579,6 +578,10 @@ def write_morph_animation_glb(path, vertices: np.ndarray, triangles: np.ndarray,
         Morph weights per keyframe.
     colors : (N, 3) or (N, 4), optional
         Vertex colours (floats in 0..1 or uint8), exported as ``COLOR_0``.
+    normals : (N, 3), optional
+        Rest vertex normals (default: area-weighted, :func:`vertex_normals`).
+        Morph targets carry no normal deltas: viewers shade the moving face
+        with the rest normals (a small shading error, no geometric one).
     force : bool
         Replace an existing file.
     """
@@ -600,7 +603,8 @@ def write_morph_animation_glb(path, vertices: np.ndarray, triangles: np.ndarray,
     buf = _GlbBuffer()
     attrs = {
         "POSITION": buf.add(x.astype("<f4"), "VEC3", _ARRAY_BUFFER),
-        "NORMAL": buf.add(vertex_normals(x, tri).astype("<f4"), "VEC3", _ARRAY_BUFFER),
+        "NORMAL": buf.add(unit_normals(vertex_normals(x, tri) if normals is None else normals)
+                          .astype("<f4"), "VEC3", _ARRAY_BUFFER),
     }
     if colors is not None:
         c = np.asarray(colors)
