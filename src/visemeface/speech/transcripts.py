@@ -153,6 +153,8 @@ def parse_transcript(text: str, fmt: str | None = None, tier: str | None = None,
         raise InputError(f"sample rate must be positive, got {sample_rate!r}")
     parser, candidates = _PARSERS[fmt]
     rows = parser(text, where, tier=tier, sample_rate=float(sample_rate))
+    if not rows:
+        raise InputError(f"no phone segments found ({fmt} format)", where, max(1, len(text.splitlines())))
     seg = make_segments(rows, where, alphabet=alphabet, candidates=candidates)
     seg.attrs["format"] = fmt
     return seg
@@ -491,7 +493,7 @@ def _parse_textgrid(text, where, tier=None, **_):
     for k, entry in enumerate(t["entries"]):
         try:
             start, end, label = float(entry[0]), float(entry[1]), str(entry[2])
-        except (TypeError, ValueError, IndexError):
+        except (TypeError, ValueError, IndexError, OverflowError):
             raise InputError(f"tier {name!r} interval {k + 1} is malformed: {entry!r}", where,
                              line_of(k)) from None
         rows.append(_Row(start, end, label, line_of(k)))
@@ -537,7 +539,7 @@ def _parse_mfa_json(text, where, tier=None, **_):
             raise InputError(f"tier {name!r} entry {k + 1} is not [start, end, label]: {e!r}", where)
         try:
             start, end = float(e[0]), float(e[1])
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise InputError(f"tier {name!r} entry {k + 1} has non-numeric times: {e!r}", where) from None
         rows.append(_Row(start, end, "" if e[2] is None else str(e[2]), None))
     total = data.get("end")

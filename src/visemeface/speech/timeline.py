@@ -1,0 +1,497 @@
+"""Segments + viseme table + emotions -> ActivationTrack (muscle activations per frame).
+
+ActivationTrack
+---------------
+A pandas DataFrame, index ``time`` (seconds, frame ``k`` at ``k / fps``),
+one column per rig function (the viseme table's numeric columns, in order),
+``attrs["fps"]`` the frame rate. ``ceil(T * fps)`` frames cover an utterance
+of ``T`` seconds.
+
+Interpolation (``mode=``)
+-------------------------
+Each segment :math:`s` (start :math:`a_s`, end :math:`b_s`, centre
+:math:`c_s`) has the target :math:`T_s`, its phoneme's row of the viseme table.
+A segment longer than :math:`2e` (``edge``, 60 ms) *holds* its target over its
+middle :math:`[a_s + e, b_s - e]` (exactly in the keyed modes; in coarticulation
+up to the neighbours' exponentially decaying dominance); a shorter one has a single key at its centre.
+Let :math:`d_s(t)` be the distance from :math:`t` to that held middle (to the
+centre for a short segment).
+
+``"linear"`` / ``"cosine"``
+    Piecewise interpolation between the keys (linear, or eased with
+    :math:`(1 - \\cos \\pi u) / 2`); a segment's influence starts at the
+    previous key.
+``"coarticulation"`` (default; Cohen & Massaro 1993)
+    Every segment has a dominance function
+    :math:`D_s(t) = \\alpha_s \\exp(-\\theta_s^{\\pm} d_s(t)^{c_s})`, with
+    :math:`\\theta^-` before the centre (anticipation) and :math:`\\theta^+`
+    after it (carry-over), from ``data/phonemes/dominance.csv``, and
+
+    .. math:: v(t) = \\frac{\\sum_s D_s(t) T_s}{\\sum_s D_s(t)} .
+
+    Rounded vowels anticipate their rounding over the consonants before them;
+    short lingual consonants hardly show.
+
+Lip closure and contact are guaranteed
+--------------------------------------
+In every mode, for each bilabial (``p b m``) and labiodental (``f v``)
+segment the speech track is pulled to the segment's target:
+:math:`v \\leftarrow (1 - w_s) v + w_s T_s` with :math:`w_s = 1` within
+:math:`h_s = \\max(\\text{held half-width}, \\tfrac{b_s - a_s}{4}, \\tfrac{1}{2\\,\\mathrm{fps}})`
+of the centre and a cosine fall to 0 over the next :math:`\\max(\\tfrac{b_s-a_s}{2},
+1/\\mathrm{fps})` (between adjacent p b m f v the targets cross-fade around the shared
+boundary instead, so a cluster such as /b m/ stays closed). The window :math:`[c_s - h_s, c_s + h_s]`
+is at least one frame interval wide, so at least one frame shows the exact target --
+the lips close on every /p b m/ however fast the speech.
+
+Emotions
+--------
+``emotions`` is a mapping ``{name: weight}`` (global, from t = 0), a key track
+(DataFrame ``time``, ``emotion``, ``weight``; see :mod:`visemeface.speech.g2p`;
+``neutral`` sets every emotion to 0), or None; a key track stored in
+``segments.attrs["emotion_keys"]`` is applied too. A weight changes by a cosine
+ramp of ``emotion_ramp`` seconds centred on its key. Each frame is then
+(seed 002 §2.2.1)
+
+.. math:: a(t) = v(t) + \\sum_e w_e(t)\\, E_e ,
+
+clamped to ``ranges`` (default: each column to
+:math:`[\\min(0, \\text{table min}), \\max(1, \\text{table max})]`).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+from collections.abc import Mapping
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from visemeface.errors import InputError, close_matches
+from visemeface.outputs import atomic_output
+from visemeface.postures.phonemes import CLOSURE, DECTALK, LABIODENTAL
+from visemeface.resources import data_path
+
+__all__ = ["MODES", "activation_track", "dominance_table", "emotion_weights", "load_track",
+           "save_track", "speech_track"]
+
+MODES = ("coarticulation", "linear", "cosine")
+#: Phonemes whose target is forced at their centre (lip closure / lip-teeth contact).
+FORCED = frozenset(CLOSURE) | frozenset(LABIODENTAL)
+
+
+@lru_cache(maxsize=1)
+def dominance_table() -> pd.DataFrame:
+    """Dominance parameters: index DECtalk symbol, columns alpha, theta_before, theta_after, c."""
+    path = data_path("phonemes", "dominance.csv")
+    with open(path, encoding="utf-8", newline="") as f:
+        rows = list(csv.DictReader(line for line in f if not line.lstrip().startswith("#")))
+    table = pd.DataFrame({k: [float(r[k]) for r in rows] for k in ("alpha", "theta_before", "theta_after", "c")},
+                         index=pd.Index([r["symbol"] for r in rows], name="symbol"))
+    assert set(DECTALK) <= set(table.index), f"{path} lacks {sorted(set(DECTALK) - set(table.index))}"
+    assert (table.to_numpy() > 0).all(), f"{path}: parameters must be positive"
+    return table
+
+
+# ----------------------------------------------------------------------------- checks
+
+def _check_segments(segments: pd.DataFrame) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    for col in ("start", "end", "phoneme"):
+        if col not in segments.columns:
+            raise InputError(f"segments lack the column {col!r}")
+    start = segments["start"].to_numpy(dtype=float)
+    end = segments["end"].to_numpy(dtype=float)
+    phones = [str(p) for p in segments["phoneme"]]
+    if len(phones) == 0:
+        raise InputError("no segments to animate")
+    if not (np.isfinite(start).all() and np.isfinite(end).all()):
+        raise InputError("segment times must be finite")
+    if (start < 0).any() or (end <= start).any() or (start[1:] < end[:-1] - 1e-9).any():
+        raise InputError("segments must be non-negative, of positive length, sorted and non-overlapping")
+    return start, end, phones
+
+
+def _viseme_matrix(visemes: pd.DataFrame, phones: list[str]) -> tuple[np.ndarray, list[str]]:
+    table = visemes.select_dtypes(include="number")
+    if table.shape[1] == 0:
+        raise InputError("the viseme table has no numeric columns")
+    index = [str(i) for i in table.index]
+    missing = sorted(set(phones) - set(index))
+    if missing:
+        raise InputError(f"the viseme table has no row for phoneme(s) {', '.join(missing)}"
+                         f"{close_matches(missing[0], index)}")
+    rows = table.to_numpy(dtype=float)
+    if not np.isfinite(rows).all():
+        raise InputError("the viseme table holds a non-finite value")
+    pos = {s: i for i, s in enumerate(index)}
+    return rows[[pos[p] for p in phones]], [str(c) for c in table.columns]
+
+
+# ----------------------------------------------------------------------------- speech
+
+def _held_half_width(start, end, edge):
+    return np.maximum(0.0, (end - start) / 2 - edge)
+
+
+def _coarticulation(times, start, end, phones, targets, edge, chunk=2048):
+    dom = dominance_table()
+    alpha = dom.loc[phones, "alpha"].to_numpy()
+    th_b = dom.loc[phones, "theta_before"].to_numpy()
+    th_a = dom.loc[phones, "theta_after"].to_numpy()
+    cexp = dom.loc[phones, "c"].to_numpy()
+    centre = (start + end) / 2
+    half = _held_half_width(start, end, edge)
+    # Segments farther than `reach` contribute < 1e-7 of the nearest: skip them.
+    reach = float(np.max((16.0 / np.minimum(th_b, th_a)) ** (1.0 / cexp)) + np.max(half))
+    out = np.empty((times.size, targets.shape[1]))
+    for lo in range(0, times.size, chunk):
+        t = times[lo:lo + chunk]
+        i0 = int(np.searchsorted(end, t[0] - reach))
+        i1 = int(np.searchsorted(start, t[-1] + reach, side="right"))
+        i1 = max(i1, i0 + 1)
+        rel = t[:, None] - centre[None, i0:i1]                       # (F, S)
+        dist = np.maximum(np.abs(rel) - half[None, i0:i1], 0.0)
+        theta = np.where(rel < 0, th_b[None, i0:i1], th_a[None, i0:i1])
+        # Work in logs relative to the row maximum so far-away segments cannot underflow all to 0.
+        logd = np.log(alpha[None, i0:i1]) - theta * dist ** cexp[None, i0:i1]
+        logd -= logd.max(axis=1, keepdims=True)
+        d = np.exp(logd)
+        out[lo:lo + chunk] = (d @ targets[i0:i1]) / d.sum(axis=1, keepdims=True)
+    return out
+
+
+def _keyed(times, start, end, targets, edge, ease):
+    centre = (start + end) / 2
+    half = _held_half_width(start, end, edge)
+    key_t = np.ravel(np.column_stack([centre - half, centre + half]))
+    key_v = np.repeat(targets, 2, axis=0)
+    out = np.empty((times.size, targets.shape[1]))
+    j = np.clip(np.searchsorted(key_t, times, side="right") - 1, 0, key_t.size - 2)
+    t0, t1 = key_t[j], key_t[j + 1]
+    span = np.where(t1 > t0, t1 - t0, 1.0)
+    u = np.clip((times - t0) / span, 0.0, 1.0)
+    u = np.where(t1 > t0, u, 1.0)
+    if ease:
+        u = (1 - np.cos(np.pi * u)) / 2
+    out[:] = key_v[j] * (1 - u)[:, None] + key_v[j + 1] * u[:, None]
+    return out
+
+
+def _force_contacts(values, times, start, end, phones, targets, fps, edge):
+    """Pull the track to the target of every p b m f v segment around its centre (see module doc).
+
+    Between adjacent forced segments (``b m``, ``v b``) the first holds its target up to
+    the boundary + r and the second fades in over [boundary - r, boundary + r], so the
+    lips stay in contact through the cluster while moving smoothly from one target to
+    the next; r is small enough that each segment keeps frames at its exact target.
+    """
+    frame = 1.0 / fps
+    n = len(phones)
+    forced = [p in FORCED for p in phones]
+    dur = end - start
+    hold = np.maximum.reduce([_held_half_width(start, end, edge), dur / 4,
+                              np.full(n, 0.5 * frame * (1 + 1e-9))])
+    # Cross-fade half-width r[s] at the boundary between s and s+1 when both are forced.
+    r = np.zeros(n)
+    for s in range(n - 1):
+        if forced[s] and forced[s + 1] and abs(end[s] - start[s + 1]) < 1e-9:
+            r[s] = max(0.0, min(min(dur[s], dur[s + 1]) / 4, dur[s] / 2 + hold[s] - frame * (1 + 1e-9),
+                                dur[s + 1] / 2 + hold[s + 1] - frame * (1 + 1e-9)))
+    for s in range(n):
+        if not forced[s]:
+            continue
+        c = (start[s] + end[s]) / 2
+        ramp = max(dur[s] / 2, frame)
+        prev_forced = s > 0 and forced[s - 1] and abs(end[s - 1] - start[s]) < 1e-9
+        next_forced = s + 1 < n and forced[s + 1] and abs(start[s + 1] - end[s]) < 1e-9
+        hold_b, ramp_b = (max(hold[s], c - start[s] - r[s - 1]), 2 * r[s - 1]) if prev_forced else (hold[s], ramp)
+        hold_a, ramp_a = (end[s] - c + r[s], 0.0) if next_forced else (hold[s], ramp)
+        lo = int(np.searchsorted(times, c - hold_b - ramp_b))
+        hi = int(np.searchsorted(times, c + hold_a + ramp_a, side="right"))
+        if hi <= lo:
+            continue
+        rel = times[lo:hi] - c
+        before = rel < 0
+        hold_t = np.where(before, hold_b, hold_a)
+        ramp_t = np.where(before, ramp_b, ramp_a)
+        d = np.abs(rel)
+        u = np.clip((d - hold_t) / np.where(ramp_t > 0, ramp_t, 1.0), 0.0, 1.0)
+        w = np.where(d <= hold_t, 1.0, np.where(ramp_t > 0, (1 + np.cos(np.pi * u)) / 2, 0.0))
+        values[lo:hi] = values[lo:hi] * (1 - w)[:, None] + targets[s][None, :] * w[:, None]
+    return values
+
+
+def _frame_times(total: float, fps: float) -> np.ndarray:
+    n = max(1, int(math.ceil(total * fps - 1e-9)))
+    return np.arange(n) / fps
+
+
+def speech_track(segments: pd.DataFrame, visemes: pd.DataFrame, fps: float = 30.0,
+                 mode: str = "coarticulation", edge: float = 0.06) -> pd.DataFrame:
+    """The viseme part of the track (no emotion, no clamping); see the module doc."""
+    if mode not in MODES:
+        raise InputError(f"unknown interpolation mode {mode!r}; choose one of {', '.join(MODES)}"
+                         f"{close_matches(str(mode), MODES)}")
+    if not (isinstance(fps, (int, float)) and math.isfinite(fps) and fps > 0):
+        raise InputError(f"frame rate must be positive, got {fps!r}")
+    start, end, phones = _check_segments(segments)
+    targets, columns = _viseme_matrix(visemes, phones)
+    times = _frame_times(float(end[-1]), float(fps))
+    if mode == "coarticulation":
+        values = _coarticulation(times, start, end, phones, targets, edge)
+    else:
+        values = _keyed(times, start, end, targets, edge, ease=(mode == "cosine"))
+    values = _force_contacts(values, times, start, end, phones, targets, float(fps), edge)
+    track = pd.DataFrame(values, index=pd.Index(times, name="time"), columns=columns)
+    track.attrs["fps"] = float(fps)
+    return track
+
+
+# ----------------------------------------------------------------------------- emotions
+
+def _keys_frame(keys) -> pd.DataFrame:
+    if keys is None:
+        return pd.DataFrame({"time": [], "emotion": [], "weight": []})
+    if isinstance(keys, pd.DataFrame):
+        missing = [c for c in ("time", "emotion", "weight") if c not in keys.columns]
+        if missing:
+            raise InputError(f"emotion key track lacks column(s) {', '.join(missing)}")
+        return keys[["time", "emotion", "weight"]]
+    raise InputError(f"emotions must be a mapping name->weight or a key track, got {type(keys).__name__}")
+
+
+def emotion_weights(times: np.ndarray, names: list[str], base: Mapping[str, float] | None = None,
+                    keys: pd.DataFrame | None = None, ramp: float = 0.3) -> np.ndarray:
+    """Weight of each emotion at each time: (len(times), len(names)).
+
+    ``base`` weights hold from the start; each key ``(time, emotion, weight)``
+    moves that emotion's weight to ``weight`` (``neutral``: all to 0) by a
+    cosine step of width ``ramp`` centred on ``time``:
+
+    .. math:: w_e(t) = w_e^0 + \\sum_k \\Delta_k\\, S\\!\\left(\\frac{t - \\tau_k}{r} + \\tfrac12\\right),
+              \\quad S(u) = \\tfrac{1 - \\cos(\\pi\\,\\mathrm{clip}(u, 0, 1))}{2}.
+    """
+    col = {n: i for i, n in enumerate(names)}
+    level = np.zeros(len(names))
+    for name, w in (base or {}).items():
+        level[col[name]] = w
+    out = np.repeat(level[None, :], times.size, axis=0)
+    if keys is not None and len(keys):
+        order = np.argsort(keys["time"].to_numpy(dtype=float), kind="stable")
+        for k in order:
+            tau = float(keys["time"].iloc[k])
+            name = str(keys["emotion"].iloc[k])
+            w = float(keys["weight"].iloc[k])
+            idx = list(range(len(names))) if name == "neutral" else [col[name]]
+            target = np.zeros(len(idx)) if name == "neutral" else np.array([w])
+            delta = target - level[idx]
+            level[idx] = target
+            if ramp > 0:
+                u = np.clip((times - tau) / ramp + 0.5, 0.0, 1.0)
+                step = (1 - np.cos(np.pi * u)) / 2
+            else:
+                step = (times >= tau).astype(float)
+            out[:, idx] += step[:, None] * delta[None, :]
+    return out
+
+
+def _check_weight(name, w):
+    try:
+        w = float(w)
+    except (TypeError, ValueError):
+        raise InputError(f"emotion weight for {name!r} is not a number: {w!r}") from None
+    if not math.isfinite(w) or w < 0:
+        raise InputError(f"emotion weight for {name!r} must be finite and >= 0, got {w!r}")
+    return w
+
+
+def activation_track(segments: pd.DataFrame, visemes: pd.DataFrame, fps: float = 30.0,
+                     mode: str = "coarticulation", emotions=None, expressions: pd.DataFrame | None = None,
+                     ranges: Mapping[str, tuple[float, float]] | None = None, edge: float = 0.06,
+                     emotion_ramp: float = 0.3) -> pd.DataFrame:
+    """Muscle activations per frame for timed phonemes (see the module doc).
+
+    Parameters
+    ----------
+    segments : Segments
+        DataFrame ``start``, ``end``, ``phoneme`` (DECtalk); an emotion key
+        track in ``attrs["emotion_keys"]`` is applied.
+    visemes : DataFrame
+        Index DECtalk symbol, numeric columns = rig function names
+        (non-numeric columns such as notes are ignored).
+    fps : float
+        Frame rate.
+    mode : {"coarticulation", "linear", "cosine"}
+    emotions : mapping or DataFrame, optional
+        Global weights ``{name: weight}`` or an emotion key track.
+    expressions : DataFrame, optional
+        Emotion table (index emotion name, columns rig functions); default
+        :func:`visemeface.postures.library.load_expressions` when needed.
+    ranges : mapping name -> (low, high), optional
+        Clamp of each column (default: see module doc).
+    edge : float
+        Ramp (s) at each end of a held segment.
+    emotion_ramp : float
+        Duration (s) of an emotion change.
+
+    Returns
+    -------
+    ActivationTrack
+
+    Raises
+    ------
+    InputError
+        Unknown mode, phoneme missing from the table, unknown emotion, bad weight.
+
+    Examples
+    --------
+    >>> seg = pd.DataFrame({"start": [0.0, 0.2, 0.3], "end": [0.2, 0.3, 0.5], "phoneme": ["_", "m", "_"]})
+    >>> vis = pd.DataFrame({"jaw": [0.3, 0.0], "orbicularis_oris": [0.0, 0.8]}, index=["_", "m"])
+    >>> track = activation_track(seg, vis, fps=20)
+    >>> track.loc[0.25].tolist()        # the frame at the centre of /m/
+    [0.0, 0.8]
+    """
+    speech = speech_track(segments, visemes, fps=fps, mode=mode, edge=edge)
+    columns = list(speech.columns)
+    values = speech.to_numpy()
+    base: dict[str, float] = {}
+    keys = [_keys_frame(segments.attrs.get("emotion_keys"))] if "emotion_keys" in segments.attrs else []
+    if isinstance(emotions, Mapping):
+        base = {str(k): _check_weight(k, v) for k, v in emotions.items()}
+    elif emotions is not None:
+        keys.append(_keys_frame(emotions))
+    keys = [k for k in keys if len(k)]
+    key_track = pd.concat(keys, ignore_index=True) if keys else None
+    names = sorted(set(base) | (set(key_track["emotion"].astype(str)) - {"neutral"} if key_track is not None
+                                else set()))
+    table_lo = visemes.select_dtypes(include="number").min().to_dict()
+    table_hi = visemes.select_dtypes(include="number").max().to_dict()
+    if names:
+        if expressions is None:
+            from visemeface.postures.library import load_expressions
+            expressions = load_expressions()
+        expr = expressions.select_dtypes(include="number")
+        known = [str(i) for i in expr.index]
+        for n in names:
+            if n not in known:
+                raise InputError(f"unknown emotion {n!r}{close_matches(n, known)}")
+        if key_track is not None:
+            for _, row in key_track.iterrows():
+                if str(row["emotion"]) != "neutral":
+                    _check_weight(row["emotion"], row["weight"])
+        extra = [c for c in expr.columns if c not in columns]
+        if extra:
+            columns += [str(c) for c in extra]
+            values = np.hstack([values, np.zeros((values.shape[0], len(extra)))])
+        E = expr.reindex(columns=columns, fill_value=0.0).loc[names].to_numpy(dtype=float)
+        W = emotion_weights(speech.index.to_numpy(), names, base, key_track, emotion_ramp)
+        values = values + W @ E
+        for c in expr.columns:
+            table_lo[c] = min(table_lo.get(c, 0.0), float(expr[c].min()))
+            table_hi[c] = max(table_hi.get(c, 1.0), float(expr[c].max()))
+    lo = np.array([min(0.0, table_lo.get(c, 0.0)) for c in columns])
+    hi = np.array([max(1.0, table_hi.get(c, 1.0)) for c in columns])
+    if ranges is not None:
+        for j, c in enumerate(columns):
+            if c in ranges:
+                lo[j], hi[j] = ranges[c]
+    values = np.clip(values, lo, hi)
+    track = pd.DataFrame(values, index=speech.index.copy(), columns=columns)
+    track.attrs["fps"] = float(fps)
+    return track
+
+
+# ----------------------------------------------------------------------------- CSV
+
+_FPS_LINE = re.compile(r"fps\s*=\s*([0-9.eE+-]+)")
+
+
+def save_track(track: pd.DataFrame, path, force: bool = False) -> Path:
+    """Write an ActivationTrack as CSV: a ``# ... fps=<fps>`` line, then ``time`` and the columns.
+
+    Written atomically (never half a file; refuses to overwrite unless ``force``).
+    Floats are written with full precision, so :func:`load_track` returns the same numbers.
+    """
+    fps = track.attrs.get("fps")
+    if fps is None:
+        raise InputError("the track has no frame rate (attrs['fps'])")
+    with atomic_output(path, force) as tmp:
+        with open(tmp, "w", encoding="utf-8", newline="") as f:
+            f.write(f"# visemeface activation track; fps={float(fps)!r}\n")
+            track.to_csv(f, index=True, index_label="time", lineterminator="\n")
+    return Path(path)
+
+
+def load_track(path) -> pd.DataFrame:
+    """Read an ActivationTrack CSV (from :func:`save_track`, or any CSV with a ``time`` column).
+
+    The frame rate comes from the ``fps=`` comment line, else from the time step.
+
+    Raises
+    ------
+    InputError
+        Missing file, no ``time`` column, a cell that is not a finite number
+        (with its line), times not increasing.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise InputError("track not found", path) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read track: {exc}", path) from None
+    lines = text.splitlines()
+    fps = None
+    skip = 0
+    while skip < len(lines) and lines[skip].lstrip().startswith("#"):
+        m = _FPS_LINE.search(lines[skip])
+        if m:
+            try:
+                fps = float(m.group(1))
+            except ValueError:
+                raise InputError(f"bad frame rate {m.group(1)!r}", path, skip + 1) from None
+        skip += 1
+    rows = list(csv.reader(lines[skip:]))
+    if not rows or "time" not in [h.strip() for h in rows[0]]:
+        raise InputError("track CSV has no 'time' column", path, skip + 1)
+    header = [h.strip() for h in rows[0]]
+    data = []
+    for k, rec in enumerate(rows[1:], start=skip + 2):
+        if not any(c.strip() for c in rec):
+            continue
+        if len(rec) != len(header):
+            raise InputError(f"expected {len(header)} values, got {len(rec)}", path, k)
+        try:
+            vals = [float(c) for c in rec]
+        except ValueError:
+            bad = next(c for c in rec if not _is_float(c))
+            raise InputError(f"value {bad!r} is not a number", path, k) from None
+        if not all(math.isfinite(v) for v in vals):
+            raise InputError("non-finite value", path, k)
+        data.append(vals)
+    if not data:
+        raise InputError("track CSV has no frames", path, skip + 1)
+    arr = np.array(data)
+    ti = header.index("time")
+    times = arr[:, ti]
+    if (np.diff(times) <= 0).any():
+        k = int(np.flatnonzero(np.diff(times) <= 0)[0])
+        raise InputError("times must increase", path, skip + 3 + k)
+    if fps is None:
+        fps = 1.0 / float(np.median(np.diff(times))) if times.size > 1 else 30.0
+    cols = [h for j, h in enumerate(header) if j != ti]
+    track = pd.DataFrame(np.delete(arr, ti, axis=1), index=pd.Index(times, name="time"), columns=cols)
+    track.attrs["fps"] = float(fps)
+    return track
+
+
+def _is_float(s: str) -> bool:
+    try:
+        float(s)
+    except ValueError:
+        return False
+    return True
