@@ -263,7 +263,7 @@ class FaceMesh:
         with atomic_output(path, force) as tmp:
             if suffix == ".obj":
                 data = tm.export(file_type="obj", include_color=True, include_normals=False,
-                                 include_texture=False)
+                                 include_texture=False, digits=12)
                 tmp.write_text(data)
             elif suffix == ".gltf":
                 # A .gltf with embedded buffers keeps the pair to two files.
