@@ -229,6 +229,15 @@ def test_jaw_sample_weights_exact_at_samples_and_bounded_by_chord():
                                atol=1e-12)
 
 
+def test_jaw_sample_weights_negative_side():
+    samples = np.array([-0.1, -0.05, 0.5, 1.0])
+    w = export.jaw_sample_weights([-0.1, -0.075, 0.0, 0.25, 1.0], samples)
+    np.testing.assert_allclose(w, [[1, 0, 0, 0], [0.5, 0.5, 0, 0], [0, 0, 0, 0],
+                                   [0, 0, 0.5, 0], [0, 0, 0, 1]], atol=1e-12)
+    with pytest.raises(ValueError):
+        export.jaw_sample_weights([0.1], [0.0, 0.5])
+
+
 def _accessor_array(gl, blob, idx):
     acc = gl.accessors[idx]
     view = gl.bufferViews[acc.bufferView]

@@ -136,7 +136,8 @@ def rig_morph_targets(rig, jaw_samples: int = JAW_SAMPLES):
     skinning of one joint would shrink the arc: :math:`(1-w)x + wR(\theta)x
     \ne R(w\theta)x`). It is exported as ``jaw_samples`` *sampled morphs*: the
     jaw displacement at openings :math:`a_k = k\,u/K` (``u`` the jaw's range
-    maximum), played with the hat weights of
+    maximum; a negative range, a clenching jaw, gets samples at the same
+    spacing), played with the hat weights of
     :func:`~visemeface.render.export.jaw_sample_weights`; this plays
     identically in every glTF viewer (Blender shape keys, three.js morph
     targets) and deviates from the rig only by the chord sag of one sample
@@ -154,9 +155,12 @@ def rig_morph_targets(rig, jaw_samples: int = JAW_SAMPLES):
     j = names.index("jaw")
     ranges = np.asarray(rig.ranges, dtype=np.float64).reshape(len(names), 2)
     lo, hi = ranges[j]
-    if lo < 0 or hi <= 0:
-        raise ValueError(f"jaw range must be within [0, max > 0], got [{lo}, {hi}]")
-    samples = hi * np.arange(1, jaw_samples + 1) / jaw_samples
+    if not lo <= 0 < hi:
+        raise ValueError(f"jaw range must contain 0 and a positive opening, got [{lo}, {hi}]")
+    step = hi / jaw_samples
+    n_neg = int(np.ceil(-lo / step - 1e-9)) if lo < 0 else 0  # a closing jaw (lo < 0) too
+    samples = np.concatenate([lo * np.arange(n_neg, 0, -1) / max(n_neg, 1),
+                              step * np.arange(1, jaw_samples + 1)])
     if j != len(names) - 1:
         raise ValueError("the rig's last function must be the jaw")
     targets = list(_muscle_bases(rig)) + [_jaw_displacement(rig, s) for s in samples]

@@ -451,40 +451,43 @@ def vertex_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
 def jaw_sample_weights(values: np.ndarray, samples: np.ndarray) -> np.ndarray:
     r"""Morph weights that play a nonlinear motion sampled at a few values.
 
-    A motion :math:`D(a)` known only at samples :math:`0 = a_0 < a_1 < \dots < a_K`
-    (with :math:`D(0) = 0`) is exported as K morph targets :math:`D(a_k)`. For a
-    value :math:`a \in [a_{k-1}, a_k]` the weights are the piecewise-linear
-    "hat" functions
+    A motion :math:`D(a)` with :math:`D(0) = 0`, known at nonzero samples
+    :math:`a_k`, is exported as one morph target :math:`D(a_k)` per sample. With
+    the nodes :math:`s_0 < s_1 < \dots` = the samples and 0, a value
+    :math:`a \in [s_{i-1}, s_i]` gets the piecewise-linear "hat" weights
 
-    .. math:: w_{k-1} = \frac{a_k - a}{a_k - a_{k-1}}, \quad
-              w_k = \frac{a - a_{k-1}}{a_k - a_{k-1}}, \quad w_j = 0 \text{ otherwise,}
+    .. math:: w_{i-1} = \frac{s_i - a}{s_i - s_{i-1}}, \quad
+              w_i = \frac{a - s_{i-1}}{s_i - s_{i-1}}, \quad w_j = 0 \text{ otherwise}
 
-    so :math:`\sum_k w_k D(a_k)` equals :math:`D(a)` exactly at the samples and
+    (the weight of the node 0 is dropped: its target is zero), so
+    :math:`\sum_k w_k D(a_k)` equals :math:`D(a)` exactly at the samples and
     interpolates it linearly between them (the chord of the jaw's arc).
-    Values beyond the last sample extrapolate along the last chord.
+    Values beyond the outer samples extrapolate along the outer chords.
 
     Parameters
     ----------
     values : (F,) array
         The motion's parameter per frame (e.g. jaw activation).
     samples : (K,) array
-        Increasing sample values :math:`a_1 .. a_K`, all > 0.
+        Increasing, nonzero sample values (may be negative).
 
     Returns
     -------
     (F, K) float array
     """
-    a = np.asarray(values, dtype=np.float64)
-    s = np.concatenate([[0.0], np.asarray(samples, dtype=np.float64)])
-    if np.any(np.diff(s) <= 0):
-        raise ValueError("jaw samples must be positive and increasing")
-    k = np.clip(np.searchsorted(s, a, side="right"), 1, len(s) - 1)  # a in [s[k-1], s[k]]
-    frac = (a - s[k - 1]) / (s[k] - s[k - 1])
-    w = np.zeros((len(a), len(s)))
+    a = np.asarray(values, dtype=np.float64).reshape(-1)
+    smp = np.asarray(samples, dtype=np.float64).reshape(-1)
+    if len(smp) == 0 or np.any(np.diff(smp) <= 0) or np.any(smp == 0):
+        raise ValueError("samples must be nonzero and increasing")
+    zero = int(np.searchsorted(smp, 0.0))
+    nodes = np.insert(smp, zero, 0.0)
+    k = np.clip(np.searchsorted(nodes, a, side="right"), 1, len(nodes) - 1)  # a in [s[k-1], s[k]]
+    frac = (a - nodes[k - 1]) / (nodes[k] - nodes[k - 1])
+    w = np.zeros((len(a), len(nodes)))
     rows = np.arange(len(a))
     w[rows, k - 1] = 1.0 - frac
     w[rows, k] = frac
-    return w[:, 1:]  # drop the rest pose (a_0 = 0), which is no target
+    return np.delete(w, zero, axis=1)
 
 
 _FLOAT, _UINT16, _UINT32 = 5126, 5123, 5125
