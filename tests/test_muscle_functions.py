@@ -82,7 +82,7 @@ def test_linear_bad_parameters():
 
 def sphincter(p, **kw):
     args = dict(centre=[0, 0, 0], axis_x=[1, 0, 0], axis_y=[0, 1, 0], semi_x=0.04, semi_y=0.02,
-                k=0.005, protrusion=0.004)
+                k=0.6, protrusion=0.004)
     args.update(kw)
     return mf.sphincter_displacement(p, **args)
 
@@ -103,6 +103,24 @@ def test_sphincter_zone_shield_and_direction():
     # Corners at (+-0.025, 0) move toward the centre: the mouth narrows.
     c = sphincter(np.array([[0.025, 0, 0], [-0.025, 0, 0]]))
     assert c[0, 0] < 0 < c[1, 0]
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.floats(0.0, 0.95), st.floats(0.005, 0.03))
+def test_sphincter_never_folds_nor_enters_shield(k, shield):
+    # Radial order along any ray is preserved and nothing crosses into the shielded disc.
+    for angle in np.linspace(0, np.pi, 7):
+        r = np.linspace(0, 0.05, 300)
+        p = np.column_stack([r * np.cos(angle), r * np.sin(angle), np.zeros_like(r)])
+        q = p + sphincter(p, k=k, shield=shield)
+        rq = np.hypot(q[:, 0], q[:, 1])
+        assert np.all(np.diff(rq) > 0)
+        assert np.all(rq[r >= shield] >= shield - 1e-12)
+
+
+def test_sphincter_rejects_k_of_one():
+    with pytest.raises(ValueError):
+        sphincter(grid(3), k=1.0)
 
 
 def test_sphincter_protrusion_grows_toward_centre():

@@ -119,7 +119,8 @@ def linear_muscle_displacement(points: np.ndarray, attachment, insertion, zone_a
 
 
 def sphincter_displacement(points: np.ndarray, centre, axis_x, axis_y, semi_x: float, semi_y: float,
-                           k: float = 1.0, protrusion: float = 0.0, depth: float | None = None) -> np.ndarray:
+                           k: float = 0.5, protrusion: float = 0.0, depth: float | None = None,
+                           shield: float | None = None, ramp: float | None = None) -> np.ndarray:
     r"""Displacement (N, 3) of a sphincter (orbicularis oris) at activation 1.
 
     In the ellipse's frame (centre :math:`c`, in-plane unit axes
@@ -130,16 +131,22 @@ def sphincter_displacement(points: np.ndarray, centre, axis_x, axis_y, semi_x: f
 
     .. math::
         d &= \cos^2\left(\rho_e \frac{\pi}{2}\right) \\
-        s &= \max\left(0, 1 - l_y^2/\rho^2\right) \\
-        \Delta\mathbf p &= -k\, d\, s\, \frac{x\mathbf e_x + y\mathbf e_y}{\rho}
+        \Delta\mathbf p &= -k\, d\, g(\rho - r_s)\, \frac{x\mathbf e_x + y\mathbf e_y}{\rho}
                          + k_p\, (1 - \rho_e^2)^2\, \mathbf n
 
-    The drawstring contraction pulls tissue toward the centre; the shield
-    factor :math:`s` is zero in the central disc of radius :math:`l_y` (the
-    semi-minor axis, seed 002 §2.1.2), so the lips do not collect at the centre
-    but the corners draw in (the mouth narrows). Protrusion along the normal
-    grows toward the centre (puckering). ``depth`` (m), when given, restricts the
-    effect to :math:`|z| \le` depth with a smooth fade, so tissue far behind the
+    The drawstring contraction pulls tissue toward the centre, by the fraction
+    :math:`k\,d` of its distance to the *shielded disc* of radius :math:`r_s`
+    (seed 002 §2.1.2: the semi-minor axis :math:`l_y`, the default), where
+    :math:`g` is a C1 ramp: 0 for :math:`s \le 0`, :math:`s^2/2\delta` up to
+    :math:`\delta` (``ramp``, default :math:`r_s`), then :math:`s - \delta/2`, so
+    :math:`0 \le g \le s` and :math:`0 \le g' \le 1` (no shading crease at
+    the disc's rim). Inside the disc nothing is pulled, and for :math:`k < 1`
+    the radial map :math:`\rho \mapsto \rho - k d\, g(\rho - r_s)` is
+    increasing and stays :math:`\ge r_s`: vertices neither collect at the centre nor enter the disc
+    nor fold over each other, while the mouth corners, outside it, draw in (the
+    mouth narrows). Protrusion along the normal grows toward the centre
+    (puckering; :math:`k_p` in metres). ``depth`` (m), when given, fades the
+    effect for :math:`|z|` between depth and 2·depth, so tissue far behind the
     lips (inside the mouth) is not pulled.
 
     Parameters
@@ -149,12 +156,21 @@ def sphincter_displacement(points: np.ndarray, centre, axis_x, axis_y, semi_x: f
         Ellipse centre and in-plane directions (``axis_y`` is orthogonalised
         against ``axis_x``).
     semi_x, semi_y : float
-        Semi-axes l_x ≥ l_y (m).
-    k, protrusion : float
-        Largest in-plane pull and largest forward push (m).
+        Semi-axes l_x >= l_y (m).
+    k : float
+        Contraction fraction, 0 <= k < 1 (dimensionless).
+    protrusion : float
+        Largest forward push k_p (m), at the centre.
+    shield : float, optional
+        Radius r_s of the shielded disc (m); default ``semi_y``.
+    ramp : float, optional
+        Width δ of the ramp at the disc's rim (m); default ``shield``.
     """
     if not 0.0 < semi_y <= semi_x:
         raise ValueError(f"need 0 < semi_y <= semi_x, got {semi_x}, {semi_y}")
+    if not 0.0 <= k < 1.0:
+        raise ValueError(f"contraction fraction k must be in [0, 1), got {k}")
+    shield = semi_y if shield is None else float(shield)
     points = np.asarray(points, dtype=float)
     ex = _unit(axis_x)
     ey = np.asarray(axis_y, dtype=float)
@@ -166,13 +182,20 @@ def sphincter_displacement(points: np.ndarray, centre, axis_x, axis_y, semi_x: f
     rho = np.hypot(x, y)
     inside = rho_e < 1.0
     d = np.where(inside, np.cos(np.minimum(rho_e, 1.0) * np.pi / 2) ** 2, 0.0)
-    shield = np.where(rho > semi_y, 1.0 - (semi_y / np.where(rho > 0, rho, 1.0)) ** 2, 0.0)
-    pull = k * d * shield / np.where(rho > 0, rho, 1.0)
+    pull = k * d * _soft_ramp(rho - shield, ramp if ramp is not None else shield) / np.where(rho > 0, rho, 1.0)
     push = np.where(inside, protrusion * (1.0 - np.minimum(rho_e, 1.0) ** 2) ** 2, 0.0)
     if depth is not None:
         fade = 1.0 - smoothstep(depth, 2.0 * depth, np.abs(z))
         pull, push = pull * fade, push * fade
     return -pull[:, None] * (x[:, None] * ex + y[:, None] * ey) + push[:, None] * n
+
+
+def _soft_ramp(s: np.ndarray, width: float) -> np.ndarray:
+    """C1 ramp: 0 below 0, s²/(2 width) up to width, then s - width/2."""
+    s = np.asarray(s, dtype=float)
+    if width <= 0:
+        return np.maximum(s, 0.0)
+    return np.where(s <= 0, 0.0, np.where(s < width, s * s / (2 * width), s - width / 2))
 
 
 def seam_height(u: np.ndarray, seam_u: np.ndarray, seam_v: np.ndarray, smooth: float = 0.0) -> np.ndarray:
@@ -217,7 +240,7 @@ def lip_trim_weights(u: np.ndarray, v: np.ndarray, surface_v: np.ndarray, side: 
     .. math::
         c &= \mathrm{smoothstep}(u_0, u_1, |u|) \quad\text{(0 between the lips, 1 past the corners)}\\
         w_b &= w_i + (w_o - w_i)\,c \\
-        t &= \frac{v - h(u)}{w_b} + \sigma\,(1 - c) \\
+        t &= \frac{v - h(u)}{w_b} + 2\sigma\,(1 - c) \\
         w &= \mathrm{smoothstep}(-1, 1, t)
 
     Between the lips the cut is sharp (width :math:`w_i`) and the tag
@@ -229,7 +252,7 @@ def lip_trim_weights(u: np.ndarray, v: np.ndarray, surface_v: np.ndarray, side: 
     u = np.asarray(u, dtype=float)
     c = smoothstep(corner_start, corner_end, np.abs(u))
     width = inner_width + (outer_width - inner_width) * c
-    t = (np.asarray(v, dtype=float) - surface_v) / width + np.asarray(side, dtype=float) * (1.0 - c)
+    t = (np.asarray(v, dtype=float) - surface_v) / width + 2.0 * np.asarray(side, dtype=float) * (1.0 - c)
     return smoothstep(-1.0, 1.0, t)
 
 

@@ -1,0 +1,138 @@
+"""Lip dimensions measured on any posed face mesh (seed 002 Table 1's lip dimensions).
+
+All measures are taken in the *rest* mouth frame of the face
+(:func:`visemeface.muscles.rig.mouth_frame`: x toward the subject's left
+mouth corner, y up, z forward), from the face's landmarks and lip-seam regions,
+so they work on any mesh with the landmarks of ``docs/conventions.md``.
+
+Absolute measures (metres): ``mouth_width`` (corner to corner), ``opening_height``
+(vertical gap between the seam-side lip mid-points; <= 0 when the lips touch or
+press), ``upper_lip_height``/``lower_lip_height`` (vermilion heights). Changes
+from rest (metres): ``protrusion`` (forward motion of the lip mid-points),
+``upper_lip_raise``, ``lower_lip_drop``, ``corner_height`` (mean of both
+corners; ``corner_height_left``/``_right`` each), ``corner_depth``,
+``chin_drop``. Contact: ``lip_contact`` (fraction of the central lip seam
+whose lips touch) and ``lips_closed`` (the centre touches).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from visemeface.errors import InputError
+
+__all__ = ["LipGauge", "lip_dimensions", "lip_changes", "TARGET_DIMENSIONS"]
+
+#: Dimensions of the viseme target table (``data/visemes/targets.csv``).
+TARGET_DIMENSIONS = ("mouth_width", "opening_height", "protrusion", "upper_lip_raise",
+                     "lower_lip_drop", "corner_height")
+
+_LANDMARKS = ("mouth_corner_left", "mouth_corner_right", "upper_lip_mid", "lower_lip_mid",
+              "upper_lip_top", "lower_lip_bottom", "chin")
+
+
+class LipGauge:
+    """Measures lip dimensions of one face's posed vertices (setup done once).
+
+    ``indices`` are the only vertices a measurement reads: callers that pose a
+    subset (fitting) pass positions of just those, in that order, to
+    :meth:`measure_subset`.
+    """
+
+    def __init__(self, face, contact_tolerance: float | None = None, central: float = 0.8):
+        from visemeface.muscles.rig import mouth_frame
+
+        missing = [n for n in _LANDMARKS if n not in face.landmarks]
+        if missing:
+            raise InputError(f"the face has no landmark {missing[0]!r}, needed to measure the lips")
+        self.frame = mouth_frame(face)
+        lm = [face.landmarks[n] for n in _LANDMARKS]
+        up = np.asarray(face.regions.get("lip_seam_upper", []), dtype=np.int64)
+        lo = np.asarray(face.regions.get("lip_seam_lower", []), dtype=np.int64)
+        rest_local = self.frame.to_local(face.vertices)
+        half = self.frame.width / 2
+        pairs = np.zeros((0, 2), dtype=np.int64)
+        if len(up) and len(lo):
+            # Pair each central upper-seam vertex with the lower-seam vertex nearest in u.
+            up = up[np.abs(rest_local[up, 0]) < central * half]
+            if len(up):
+                j = np.argmin(np.abs(rest_local[up, 0][:, None] - rest_local[lo, 0][None, :]), axis=1)
+                pairs = np.column_stack([up, lo[j]])
+        self.indices = np.unique(np.concatenate([lm, pairs.ravel()]))
+        pos = {int(v): i for i, v in enumerate(self.indices)}
+        self._lm = {n: pos[face.landmarks[n]] for n in _LANDMARKS}
+        self._pairs = np.array([[pos[int(a)], pos[int(b)]] for a, b in pairs], dtype=np.int64).reshape(-1, 2)
+        self._rest = self.frame.to_local(face.vertices[self.indices])
+        self.tolerance = 0.01 * self.frame.width if contact_tolerance is None else contact_tolerance
+        self.rest = self.measure_subset(face.vertices[self.indices])
+
+    def measure(self, vertices: np.ndarray) -> dict:
+        """Dimensions of a full posed vertex array (N, 3)."""
+        return self.measure_subset(np.asarray(vertices, dtype=float)[self.indices])
+
+    def measure_subset(self, points: np.ndarray) -> dict:
+        """Dimensions from the positions of ``self.indices`` (len(indices), 3)."""
+        p = self.frame.to_local(points)
+        r = self._rest
+        L = self._lm
+        d = p - r
+        cl, cr = L["mouth_corner_left"], L["mouth_corner_right"]
+        um, lm = L["upper_lip_mid"], L["lower_lip_mid"]
+        opening = float(p[um, 1] - p[lm, 1])
+        out = {
+            "mouth_width": float(np.linalg.norm(p[cl] - p[cr])),
+            "opening_height": opening,
+            "protrusion": float((d[um, 2] + d[lm, 2]) / 2),
+            "upper_lip_raise": float(d[um, 1]),
+            "lower_lip_drop": float(-d[lm, 1]),
+            "corner_height": float((d[cl, 1] + d[cr, 1]) / 2),
+            "corner_height_left": float(d[cl, 1]),
+            "corner_height_right": float(d[cr, 1]),
+            "corner_depth": float((d[cl, 2] + d[cr, 2]) / 2),
+            "upper_lip_height": float(p[L["upper_lip_top"], 1] - p[um, 1]),
+            "lower_lip_height": float(p[lm, 1] - p[L["lower_lip_bottom"], 1]),
+            "chin_drop": float(-d[L["chin"], 1]),
+        }
+        if len(self._pairs):
+            gaps = p[self._pairs[:, 0], 1] - p[self._pairs[:, 1], 1]
+            out["lip_contact"] = float(np.mean(gaps <= self.tolerance))
+        else:
+            out["lip_contact"] = float(opening <= self.tolerance)
+        out["lips_closed"] = bool(opening <= self.tolerance)
+        return out
+
+    def changes(self, vertices: np.ndarray) -> dict:
+        """Target dimensions as change from rest in fractions of the rest mouth width."""
+        return self.changes_subset(np.asarray(vertices, dtype=float)[self.indices])
+
+    def changes_subset(self, points: np.ndarray) -> dict:
+        m = self.measure_subset(points)
+        W = self.frame.width
+        out = {}
+        for k in TARGET_DIMENSIONS + ("corner_height_left", "corner_height_right", "corner_depth", "chin_drop"):
+            base = self.rest[k] if k in ("mouth_width", "opening_height") else 0.0
+            out[k] = (m[k] - base) / W
+        return out
+
+
+def lip_dimensions(face, vertices: np.ndarray) -> dict:
+    """Lip dimensions (metres, see the module docstring) of ``vertices`` on ``face``.
+
+    Examples
+    --------
+    >>> from visemeface.muscles.rig import default_rig
+    >>> rig = default_rig()
+    >>> d = lip_dimensions(rig.face, rig.pose({"jaw": 0.5}))
+    >>> d["opening_height"] > lip_dimensions(rig.face, rig.face.vertices)["opening_height"]
+    True
+    """
+    return LipGauge(face).measure(vertices)
+
+
+def lip_changes(face, vertices: np.ndarray) -> dict:
+    """:data:`TARGET_DIMENSIONS` (and a few more) as change from rest / rest mouth width.
+
+    The units of the viseme target table: ``mouth_width = -0.2`` means the mouth
+    is a fifth of its rest width narrower.
+    """
+    return LipGauge(face).changes(vertices)

@@ -1,0 +1,537 @@
+"""The Waters muscle rig: 25 muscles and the jaw placed on any face mesh.
+
+A rig file (TOML, ``data/rig/default.toml``) places every muscle relative to
+the face's landmarks, in a *mouth frame* measured on the mesh: origin the
+midpoint of the mouth corners, x toward ``mouth_corner_left``, y up (chin to
+nasion, made orthogonal to x), z = x × y forward, and lengths in mouth widths
+``W`` (corner-to-corner distance). The same file therefore fits the default
+face at any resolution and a user's mesh with landmarks.
+
+On construction each muscle's displacement at activation 1 is computed on the
+rest mesh (a basis field ``B_m``, (N, 3)) and trimmed by the lip surface; a pose
+is
+
+.. math:: X(\\mathbf a) = X_0 + \\sum_m a_m B_m + J(a_{jaw})
+
+where the jaw term :math:`J` rotates the lower face about the jaw-joint axis
+(nonlinear in its angle, evaluated per pose). Activations are clamped to each
+muscle's range (seed 002 §2.1.3) with a warning naming the muscles.
+
+Rig file format
+---------------
+``[trim]`` (lip-trim surface), ``[defaults]`` (``exclude``: regions no muscle
+moves), ``[jaw]`` and one ``[[muscle]]`` table per muscle or left/right pair.
+A point is ``{at = "landmark", offset = [x, y, z]}`` or
+``{mix = {landmark = weight, ...}, offset = [...]}`` with the offset in mouth
+widths along the mouth frame. In a pair (``sides = ["left", "right"]``) the
+text ``{side}`` in landmark names is replaced by the side and x offsets are
+written for the left side (+x = outward); the right side mirrors them.
+"""
+
+from __future__ import annotations
+
+import functools
+import re
+import tomllib
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from visemeface.errors import InputError, close_matches
+from visemeface.muscles import functions as mf
+from visemeface.resources import data_path
+
+__all__ = ["Muscle", "MouthFrame", "MuscleRig", "default_rig", "mouth_frame", "SPEECH_FUNCTIONS"]
+
+#: Seed 002 Table 1: the twelve functions used for visual speech.
+SPEECH_FUNCTIONS = (
+    "orbicularis_oris",
+    "risorius_left", "risorius_right",
+    "depressor_labii_inferioris_left", "depressor_labii_inferioris_right",
+    "levator_labii_superioris_left", "levator_labii_superioris_right",
+    "zygomatic_major_left", "zygomatic_major_right",
+    "depressor_anguli_oris_left", "depressor_anguli_oris_right",
+    "jaw",
+)
+
+LIP_SIDES = ("upper", "lower", "both")
+
+
+@dataclass(frozen=True)
+class MouthFrame:
+    """Mouth frame of a rest mesh: origin, unit axes (rows of ``axes``) and mouth width."""
+
+    origin: np.ndarray
+    axes: np.ndarray  # (3, 3): ex, ey, ez
+    width: float
+
+    def to_local(self, points: np.ndarray) -> np.ndarray:
+        """World points (N, 3) -> frame coordinates (m) along ex, ey, ez."""
+        return (np.asarray(points, dtype=float) - self.origin) @ self.axes.T
+
+    def to_world(self, offset_w: np.ndarray) -> np.ndarray:
+        """An offset in mouth widths along the frame axes -> a world vector (m)."""
+        return self.width * (np.asarray(offset_w, dtype=float) @ self.axes)
+
+
+def mouth_frame(face) -> MouthFrame:
+    """The :class:`MouthFrame` of ``face`` from its rest landmarks."""
+    cl = face.landmark_position("mouth_corner_left")
+    cr = face.landmark_position("mouth_corner_right")
+    width = float(np.linalg.norm(cl - cr))
+    if not width > 0:
+        raise InputError("mouth corners coincide: cannot place the rig")
+    ex = (cl - cr) / width
+    up = face.landmark_position("nasion") - face.landmark_position("chin")
+    ey = up - (up @ ex) * ex
+    ey /= np.linalg.norm(ey)
+    ez = np.cross(ex, ey)
+    return MouthFrame(origin=(cl + cr) / 2, axes=np.stack([ex, ey, ez]), width=width)
+
+
+@dataclass
+class Muscle:
+    """One muscle placed on a face (positions in metres, angles in radians)."""
+
+    name: str
+    kind: str  # "linear" | "sphincter"
+    side: str  # "left" | "right" | "centre"
+    lip: str  # "upper" | "lower" | "both"
+    range: tuple
+    attachment: np.ndarray | None = None
+    insertion: np.ndarray | None = None
+    zone_angle: float = 0.0
+    falloff_start: float = 0.0
+    falloff_end: float = 0.0
+    centre: np.ndarray | None = None
+    semi_x: float = 0.0
+    semi_y: float = 0.0
+    k: float = 0.0
+    protrusion: float = 0.0
+    depth: float | None = None
+    shield: float | None = None
+    exclude: tuple = ()
+    description: str = ""
+    params: dict = field(default_factory=dict)
+
+    def field(self, points: np.ndarray, frame: MouthFrame) -> np.ndarray:
+        """Untrimmed displacement (N, 3) at activation 1."""
+        if self.kind == "linear":
+            return mf.linear_muscle_displacement(points, self.attachment, self.insertion, self.zone_angle,
+                                                 self.falloff_start, self.falloff_end, self.k)
+        return mf.sphincter_displacement(points, self.centre, frame.axes[0], frame.axes[1], self.semi_x,
+                                         self.semi_y, self.k, self.protrusion, self.depth, self.shield)
+
+
+class _RigFileReader:
+    """Parses and validates a rig TOML; every error names file, entry and field."""
+
+    def __init__(self, path: Path, face, frame: MouthFrame):
+        self.path = path
+        self.face = face
+        self.frame = frame
+        try:
+            self.text = path.read_text(encoding="utf-8")
+        except OSError as exc:
+            raise InputError(f"cannot read rig file: {exc.strerror}", path) from None
+        try:
+            self.data = tomllib.loads(self.text)
+        except tomllib.TOMLDecodeError as exc:
+            line = getattr(exc, "lineno", None)
+            raise InputError(f"not valid TOML: {getattr(exc, 'msg', exc)}", path, line) from None
+
+    def line_of(self, name: str) -> int | None:
+        m = re.search(r'^\s*name\s*=\s*"' + re.escape(name) + '"', self.text, re.M)
+        return self.text.count("\n", 0, m.start()) + 1 if m else None
+
+    def error(self, entry: str, fld: str, message: str):
+        return InputError(f"entry {entry!r}, field {fld!r}: {message}", self.path, self.line_of(entry))
+
+    def get(self, table: Mapping, entry: str, fld: str, kind=float, default=...):
+        if fld not in table:
+            if default is ...:
+                raise self.error(entry, fld, "missing")
+            return default
+        value = table[fld]
+        if kind is float:
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+                raise self.error(entry, fld, f"expected a finite number, got {value!r}")
+            return float(value)
+        if kind is str:
+            if not isinstance(value, str):
+                raise self.error(entry, fld, f"expected text, got {value!r}")
+            return value
+        if kind == "range":
+            if (not isinstance(value, list) or len(value) != 2
+                    or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in value)
+                    or not value[0] < value[1]):
+                raise self.error(entry, fld, f"expected [low, high] with low < high, got {value!r}")
+            return (float(value[0]), float(value[1]))
+        if kind == "regions":
+            if not isinstance(value, list) or not all(isinstance(x, str) for x in value):
+                raise self.error(entry, fld, f"expected a list of region names, got {value!r}")
+            return tuple(value)
+        raise AssertionError(kind)
+
+    def landmark(self, entry: str, fld: str, name: str) -> np.ndarray:
+        if name not in self.face.landmarks:
+            raise self.error(entry, fld, f"unknown landmark {name!r}" + close_matches(name, self.face.landmarks))
+        return self.face.landmark_position(name)
+
+    def point(self, table: Mapping, entry: str, fld: str, side: str) -> np.ndarray:
+        spec = table.get(fld)
+        if not isinstance(spec, Mapping):
+            raise self.error(entry, fld, "missing" if spec is None else
+                             f"expected {{at = \"landmark\", offset = [x, y, z]}}, got {spec!r}")
+        sub = side if side in ("left", "right") else ""
+
+        def name_of(n):
+            if "{side}" in n and not sub:
+                raise self.error(entry, fld, f"landmark {n!r} uses {{side}} but the muscle has no sides")
+            return n.replace("{side}", sub)
+
+        if "at" in spec and "mix" not in spec:
+            if not isinstance(spec["at"], str):
+                raise self.error(entry, fld, f"'at' must be a landmark name, got {spec['at']!r}")
+            base = self.landmark(entry, fld, name_of(spec["at"]))
+        elif "mix" in spec and "at" not in spec:
+            mix = spec["mix"]
+            if not isinstance(mix, Mapping) or not mix:
+                raise self.error(entry, fld, f"'mix' must map landmarks to weights, got {mix!r}")
+            total, base = 0.0, np.zeros(3)
+            for n, w in mix.items():
+                if isinstance(w, bool) or not isinstance(w, (int, float)) or not np.isfinite(w):
+                    raise self.error(entry, fld, f"weight of {n!r} must be a number, got {w!r}")
+                base = base + float(w) * self.landmark(entry, fld, name_of(n))
+                total += float(w)
+            if abs(total) < 1e-12:
+                raise self.error(entry, fld, "mix weights sum to zero")
+            base = base / total
+        else:
+            raise self.error(entry, fld, "give exactly one of 'at' or 'mix'")
+        offset = spec.get("offset", [0.0, 0.0, 0.0])
+        if (not isinstance(offset, list) or len(offset) != 3
+                or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in offset)):
+            raise self.error(entry, fld, f"offset must be [x, y, z] in mouth widths, got {offset!r}")
+        offset = np.array(offset, dtype=float)
+        if side == "right":
+            offset[0] = -offset[0]
+        return base + self.frame.to_world(offset)
+
+
+def _muscles_from(reader: _RigFileReader) -> list[Muscle]:
+    data = reader.data
+    entries = data.get("muscle")
+    if not isinstance(entries, list) or not entries:
+        raise InputError("no [[muscle]] entries", reader.path)
+    default_exclude = reader.get(data.get("defaults", {}), "defaults", "exclude", "regions", ())
+    W = reader.frame.width
+    muscles: list[Muscle] = []
+    for i, table in enumerate(entries):
+        base = table.get("name") if isinstance(table.get("name"), str) else f"muscle #{i + 1}"
+        if not isinstance(table.get("name"), str):
+            raise reader.error(base, "name", "missing")
+        kind = reader.get(table, base, "kind", str)
+        if kind not in ("linear", "sphincter"):
+            raise reader.error(base, "kind", f"expected 'linear' or 'sphincter', got {kind!r}")
+        lip = reader.get(table, base, "lip", str)
+        if lip not in LIP_SIDES:
+            raise reader.error(base, "lip", f"expected one of {', '.join(LIP_SIDES)}, got {lip!r}")
+        rng = reader.get(table, base, "range", "range")
+        sides = table.get("sides", [])
+        if sides not in ([], ["left", "right"]):
+            raise reader.error(base, "sides", f'expected ["left", "right"] or nothing, got {sides!r}')
+        exclude = default_exclude + reader.get(table, base, "exclude", "regions", ())
+        for region in exclude:
+            if region not in reader.face.regions:
+                raise reader.error(base, "exclude", f"unknown region {region!r}"
+                                   + close_matches(region, reader.face.regions))
+        for side in sides or ["centre"]:
+            name = f"{base}_{side}" if sides else base
+            m = Muscle(name=name, kind=kind, side=side, lip=lip, range=rng, exclude=exclude,
+                       description=str(table.get("description", "")), params=dict(table))
+            if kind == "linear":
+                m.k = reader.get(table, base, "k", float) * W
+                m.attachment = reader.point(table, base, "attachment", side)
+                m.insertion = reader.point(table, base, "insertion", side)
+                length = float(np.linalg.norm(m.insertion - m.attachment))
+                if length <= 0:
+                    raise reader.error(base, "insertion", "insertion coincides with the attachment")
+                omega = reader.get(table, base, "zone_angle_deg", float)
+                if not 0 < omega < 180:
+                    raise reader.error(base, "zone_angle_deg", f"must be in (0, 180), got {omega}")
+                m.zone_angle = np.radians(omega)
+                rs = reader.get(table, base, "falloff_start", float)
+                rf = reader.get(table, base, "falloff_end", float)
+                if not 0 < rs < rf:
+                    raise reader.error(base, "falloff_end", f"need 0 < falloff_start < falloff_end, got {rs}, {rf}")
+                m.falloff_start, m.falloff_end = rs * length, rf * length
+            else:
+                m.centre = reader.point(table, base, "centre", side)
+                sx = reader.get(table, base, "semi_x", float)
+                sy = reader.get(table, base, "semi_y", float)
+                if not 0 < sy <= sx:
+                    raise reader.error(base, "semi_y", f"need 0 < semi_y <= semi_x, got {sx}, {sy}")
+                m.semi_x, m.semi_y = sx * W, sy * W
+                m.k = reader.get(table, base, "k", float)
+                if not 0 <= m.k < 1:
+                    raise reader.error(base, "k", f"a sphincter's contraction fraction must be in [0, 1), got {m.k}")
+                shield = reader.get(table, base, "shield", float, None)
+                m.shield = None if shield is None else shield * W
+                m.protrusion = reader.get(table, base, "protrusion", float, 0.0) * W
+                depth = reader.get(table, base, "depth", float, None)
+                m.depth = None if depth is None else depth * W
+            muscles.append(m)
+    names = [m.name for m in muscles]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise reader.error(dup[0], "name", "defined twice")
+    if "jaw" in names:
+        raise reader.error("jaw", "name", "'jaw' is reserved for the [jaw] table")
+    return muscles
+
+
+class MuscleRig:
+    """Muscles and jaw placed on a face, with precomputed displacement bases.
+
+    Build with :meth:`from_file`. Attributes: ``face``, ``muscles`` (list of
+    :class:`Muscle`), ``names`` (muscle names then ``"jaw"``), ``ranges``
+    ((M+1, 2)), ``bases`` ((M, N, 3) trimmed displacement at activation 1),
+    ``upper_weight`` ((N,) lip-trim weight of upper-lip muscles), ``jaw_weight``
+    ((N,)), ``frame`` (:class:`MouthFrame`), ``path`` (the rig file).
+    """
+
+    def __init__(self, face, muscles: list[Muscle], jaw: dict, trim: dict, frame: MouthFrame,
+                 path: Path | None = None):
+        self.face = face
+        self.muscles = muscles
+        self.frame = frame
+        self.path = path
+        self.jaw = jaw
+        self.trim = trim
+        self.names = tuple(m.name for m in muscles) + ("jaw",)
+        self.index = {n: i for i, n in enumerate(self.names)}
+        self.ranges = np.array([m.range for m in muscles] + [jaw["range"]], dtype=float)
+        rest = face.vertices
+        self.rest = rest
+        local = frame.to_local(rest)
+        u = local[:, 0] / (frame.width / 2)
+        self.upper_weight = self._trim_weights(face, frame, local, u, trim)
+        lower = 1.0 - self.upper_weight
+        bases = np.zeros((len(muscles), len(rest), 3))
+        for i, m in enumerate(muscles):
+            b = m.field(rest, frame)
+            if m.lip == "upper":
+                b *= self.upper_weight[:, None]
+            elif m.lip == "lower":
+                b *= lower[:, None]
+            for region in m.exclude:
+                b[face.regions[region]] = 0.0
+            bases[i] = b
+        self.bases = bases
+        jw = mf.jaw_centre_weight(u, jaw["reach"]) * lower
+        for region in jaw["exclude"]:
+            jw[face.regions[region]] = 0.0
+        self.jaw_weight = jw
+        self.jaw_joints = (face.landmark_position(jaw["joints"][0]), face.landmark_position(jaw["joints"][1]))
+        self.max_jaw_angle = jaw["max_angle"]
+        # Fast path: only vertices that something moves.
+        moving = np.any(bases != 0.0, axis=(0, 2))
+        self._active = np.flatnonzero(moving | (jw > 0))
+        self._flat = np.ascontiguousarray(bases[:, self._active].reshape(len(muscles), -1))
+        self._jaw_idx = np.flatnonzero(jw > 0)
+        self._jaw_pos = np.searchsorted(self._active, self._jaw_idx)
+        jl, jr = self.jaw_joints
+        kax = (jl - jr) / np.linalg.norm(jl - jr)
+        r = rest[self._jaw_idx] - jr
+        self._jaw_perp = r - np.outer(r @ kax, kax)
+        self._jaw_cross = np.cross(kax, r)
+        self._jaw_w = jw[self._jaw_idx]
+
+    # ---------------------------------------------------------------- build
+    @staticmethod
+    def _trim_weights(face, frame, local, u, trim) -> np.ndarray:
+        seam = np.concatenate([face.region("lip_seam_upper"), face.region("lip_seam_lower")])
+        corners = [face.landmarks["mouth_corner_left"], face.landmarks["mouth_corner_right"]]
+        seam = np.unique(np.concatenate([seam, corners]))
+        surface = mf.seam_height(u, u[seam], local[seam, 1], smooth=trim["smooth"] / (frame.width / 2))
+        side = np.zeros(len(u))
+        if "upper_lip" in face.regions:
+            side[face.regions["upper_lip"]] = 1.0
+        if "lower_lip" in face.regions:
+            side[face.regions["lower_lip"]] = -1.0
+        return mf.lip_trim_weights(u, local[:, 1], surface, side, trim["inner_width"] * frame.width,
+                                   trim["outer_width"] * frame.width, trim["corner_start"], trim["corner_end"])
+
+    @classmethod
+    def from_file(cls, face, path: str | Path | None = None) -> MuscleRig:
+        """Place the rig described by ``path`` (default ``data/rig/default.toml``) on ``face``."""
+        path = Path(path) if path is not None else data_path("rig", "default.toml")
+        for name in ("mouth_corner_left", "mouth_corner_right", "nasion", "chin"):
+            if name not in face.landmarks:
+                raise InputError(f"the face has no landmark {name!r}, needed to place the rig", path)
+        frame = mouth_frame(face)
+        reader = _RigFileReader(path, face, frame)
+        muscles = _muscles_from(reader)
+        t = reader.data.get("trim", {})
+        trim = {f: reader.get(t, "trim", f, float) for f in
+                ("inner_width", "outer_width", "corner_start", "corner_end", "smooth")}
+        if not 0 < trim["inner_width"] <= trim["outer_width"]:
+            raise reader.error("trim", "outer_width", "need 0 < inner_width <= outer_width")
+        if not 0 <= trim["corner_start"] < trim["corner_end"]:
+            raise reader.error("trim", "corner_end", "need 0 <= corner_start < corner_end")
+        for region in ("lip_seam_upper", "lip_seam_lower"):
+            if region not in face.regions or len(face.regions[region]) == 0:
+                raise InputError(f"the face has no {region!r} region, needed for lip trimming", path)
+        j = reader.data.get("jaw")
+        if not isinstance(j, Mapping):
+            raise reader.error("jaw", "jaw", "missing [jaw] table")
+        joints = j.get("joints", ["jaw_joint_left", "jaw_joint_right"])
+        if not (isinstance(joints, list) and len(joints) == 2 and all(isinstance(x, str) for x in joints)):
+            raise reader.error("jaw", "joints", f"expected two landmark names, got {joints!r}")
+        for n in joints:
+            reader.landmark("jaw", "joints", n)
+        jaw = {
+            "joints": joints,
+            "max_angle": np.radians(reader.get(j, "jaw", "max_angle_deg", float)),
+            "reach": reader.get(j, "jaw", "reach", float),
+            "range": reader.get(j, "jaw", "range", "range"),
+            "exclude": reader.get(j, "jaw", "exclude", "regions", ()),
+        }
+        for region in jaw["exclude"]:
+            if region not in face.regions:
+                raise reader.error("jaw", "exclude", f"unknown region {region!r}" + close_matches(region, face.regions))
+        if jaw["reach"] <= 0:
+            raise reader.error("jaw", "reach", f"must be positive, got {jaw['reach']}")
+        return cls(face, muscles, jaw, trim, frame, path)
+
+    # -------------------------------------------------------- activations
+    def muscle(self, name: str) -> Muscle:
+        """The :class:`Muscle` called ``name`` (InputError with close matches if unknown)."""
+        for m in self.muscles:
+            if m.name == name:
+                return m
+        raise InputError(f"unknown muscle {name!r}" + close_matches(name, self.names))
+
+    def activation_vector(self, mapping: Mapping | None = None, **kw) -> np.ndarray:
+        """Activations (M+1,) in ``names`` order from ``{name: value}`` (missing = 0).
+
+        Unknown names raise :class:`InputError` listing close matches; NaN/inf
+        raise naming the muscle; values outside a muscle's range are clamped with
+        one warning naming them.
+        """
+        items = dict(mapping or {})
+        items.update(kw)
+        a = np.zeros(len(self.names))
+        for name, value in items.items():
+            if name not in self.index:
+                raise InputError(f"unknown muscle {name!r}" + close_matches(str(name), self.names))
+            try:
+                v = float(value)
+            except (TypeError, ValueError):
+                raise InputError(f"activation of {name!r} is not a number: {value!r}") from None
+            if not np.isfinite(v):
+                raise InputError(f"activation of {name!r} is {v} (must be finite)")
+            a[self.index[name]] = v
+        return self._clamp(a)
+
+    def _clamp(self, a: np.ndarray) -> np.ndarray:
+        lo, hi = self.ranges[:, 0], self.ranges[:, 1]
+        bad = (a < lo) | (a > hi)
+        if bad.any():
+            what = ", ".join(f"{self.names[i]}={a[i]:g} -> {np.clip(a[i], lo[i], hi[i]):g}"
+                             for i in np.flatnonzero(bad))
+            warnings.warn(f"activations clamped to the muscles' ranges: {what}", stacklevel=3)
+            a = np.clip(a, lo, hi)
+        return a
+
+    def _vector(self, a) -> np.ndarray:
+        if isinstance(a, Mapping) or hasattr(a, "items"):
+            return self.activation_vector(dict(a.items()))
+        a = np.asarray(a, dtype=float)
+        if a.shape != (len(self.names),):
+            raise InputError(f"expected {len(self.names)} activations in rig.names order, got shape {a.shape}")
+        if not np.all(np.isfinite(a)):
+            i = int(np.flatnonzero(~np.isfinite(a))[0])
+            raise InputError(f"activation of {self.names[i]!r} is {a[i]} (must be finite)")
+        return self._clamp(a)
+
+    # ---------------------------------------------------------------- poses
+    def jaw_displacement(self, jaw: float) -> np.ndarray:
+        """Displacement (N, 3) of the jaw alone at activation ``jaw`` (angle = jaw · max angle)."""
+        out = np.zeros_like(self.rest)
+        out[self._jaw_idx] = self._jaw_term(float(jaw))
+        return out
+
+    def _jaw_term(self, jaw: float) -> np.ndarray:
+        theta = (jaw * self.max_jaw_angle) * self._jaw_w
+        return (np.cos(theta) - 1.0)[:, None] * self._jaw_perp + np.sin(theta)[:, None] * self._jaw_cross
+
+    def displacement(self, a) -> np.ndarray:
+        """Displacement (N, 3) from rest: :math:`\\sum_m a_m B_m + J(a_{jaw})`."""
+        a = self._vector(a)
+        out = np.zeros_like(self.rest)
+        out[self._active] = self._active_displacement(a)
+        return out
+
+    def _active_displacement(self, a: np.ndarray) -> np.ndarray:
+        d = (a[:-1] @ self._flat).reshape(-1, 3)
+        if a[-1] != 0.0:
+            d[self._jaw_pos] += self._jaw_term(a[-1])
+        return d
+
+    def pose(self, a) -> np.ndarray:
+        """Posed vertices (N, 3): rest + :meth:`displacement`. ``a``: mapping or vector in ``names`` order."""
+        a = self._vector(a)
+        out = self.rest.copy()
+        out[self._active] += self._active_displacement(a)
+        return out
+
+    def poses(self, activations) -> np.ndarray:
+        """Posed vertices (F, N, 3) float32 for activations (F, M+1) (or a DataFrame with rig columns)."""
+        if hasattr(activations, "columns"):
+            unknown = [c for c in activations.columns if c not in self.index]
+            if unknown:
+                raise InputError(f"unknown muscle {unknown[0]!r}" + close_matches(str(unknown[0]), self.names))
+            activations = activations.reindex(columns=list(self.names), fill_value=0.0).to_numpy(float)
+        A = np.atleast_2d(np.asarray(activations, dtype=float))
+        if A.ndim != 2 or A.shape[1] != len(self.names):
+            raise InputError(f"expected activations of shape (frames, {len(self.names)}), got {A.shape}")
+        if not np.all(np.isfinite(A)):
+            f, i = np.argwhere(~np.isfinite(A))[0]
+            raise InputError(f"activation of {self.names[i]!r} at frame {f} is {A[f, i]} (must be finite)")
+        lo, hi = self.ranges[:, 0], self.ranges[:, 1]
+        bad = np.any((A < lo) | (A > hi), axis=0)
+        if bad.any():
+            warnings.warn("activations clamped to the muscles' ranges: "
+                          + ", ".join(self.names[i] for i in np.flatnonzero(bad)), stacklevel=2)
+            A = np.clip(A, lo, hi)
+        out = np.broadcast_to(self.rest.astype(np.float32), (len(A),) + self.rest.shape).copy()
+        d = (A[:, :-1] @ self._flat).reshape(len(A), -1, 3)
+        theta = (A[:, -1:] * self.max_jaw_angle) * self._jaw_w[None, :]
+        d[:, self._jaw_pos] += ((np.cos(theta) - 1.0)[..., None] * self._jaw_perp
+                                + np.sin(theta)[..., None] * self._jaw_cross)
+        out[:, self._active] += d.astype(np.float32)
+        return out
+
+    def table(self):
+        """A DataFrame describing the muscles: name, kind, side, range, lip side."""
+        import pandas as pd
+        rows = [(m.name, m.kind, m.side, m.range[0], m.range[1], m.lip) for m in self.muscles]
+        rows.append(("jaw", "rotation", "centre", *self.jaw["range"], "lower"))
+        return pd.DataFrame(rows, columns=["name", "kind", "side", "min", "max", "lip"]).set_index("name")
+
+
+@functools.lru_cache(maxsize=4)
+def _default_rig(resolution):
+    from visemeface.face.procedural import default_face
+    face = default_face() if resolution is None else default_face(resolution=resolution)
+    return MuscleRig.from_file(face)
+
+
+def default_rig(resolution: int | None = None) -> MuscleRig:
+    """The default rig file placed on the default face (cached; do not modify it)."""
+    return _default_rig(resolution)

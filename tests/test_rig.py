@@ -1,0 +1,262 @@
+"""The muscle rig on the default face: placement, symmetry, trimming, jaw, superposition, errors."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+from visemeface.errors import InputError
+from scipy.spatial import cKDTree
+
+from visemeface.face.procedural import default_face
+from visemeface.muscles.measure import LipGauge, lip_changes, lip_dimensions
+from visemeface.muscles.rig import MuscleRig, default_rig, mouth_frame
+from visemeface.resources import data_path
+
+PAIRS = ("zygomatic_major", "zygomatic_minor", "levator_labii_superioris",
+         "levator_labii_superioris_alaeque_nasi", "levator_anguli_oris", "risorius",
+         "depressor_anguli_oris", "depressor_labii_inferioris", "mentalis", "frontalis_medialis",
+         "frontalis_lateralis", "corrugator")
+
+
+@pytest.fixture(scope="module")
+def rig():
+    return default_rig()
+
+
+def test_names_and_ranges(rig):
+    expect = tuple(f"{p}_{s}" for p in PAIRS for s in ("left", "right")) + ("orbicularis_oris", "jaw")
+    assert rig.names == expect and len(rig.muscles) == 25
+    assert rig.ranges.shape == (26, 2) and np.all(rig.ranges[:, 0] < rig.ranges[:, 1])
+    assert rig.bases.shape == (25, rig.face.n_vertices, 3)
+    # Every muscle moves something, by millimetres, not metres.
+    mags = np.linalg.norm(rig.bases, axis=2).max(axis=1)
+    assert np.all(mags > 0.002) and np.all(mags < 0.02)
+
+
+def lip_aware_mirror(face):
+    """Index of each vertex's mirror image (x -> -x), keeping upper-lip copies with upper-lip copies."""
+    tag = np.zeros(face.n_vertices)
+    tag[face.regions["upper_lip"]] = 1.0
+    tag[face.regions["lower_lip"]] = -1.0
+    pts = np.column_stack([face.vertices, tag])
+    mirrored = pts * np.array([-1.0, 1.0, 1.0, 1.0])
+    dist, m = cKDTree(pts).query(mirrored)
+    assert dist.max() < 1e-9
+    return m
+
+
+def test_left_muscles_mirror_right_partners_exactly(rig):
+    m = lip_aware_mirror(rig.face)
+    flip = np.array([-1.0, 1.0, 1.0])
+    fractions = []
+    for p in PAIRS:
+        left = rig.bases[rig.index[f"{p}_left"]]
+        right = rig.bases[rig.index[f"{p}_right"]]
+        np.testing.assert_allclose(right[m] * flip, left, atol=1e-12, err_msg=p)
+        # Left muscles move (mostly) the subject's left side, +x.
+        mag = np.linalg.norm(left, axis=1)
+        fractions.append(mag[rig.rest[:, 0] > 0].sum() / mag.sum())
+        assert fractions[-1] > 0.65, p
+    assert np.median(fractions) > 0.9
+    # The unpaired functions are symmetric themselves.
+    for name in ("orbicularis_oris",):
+        b = rig.bases[rig.index[name]]
+        np.testing.assert_allclose(b[m] * flip, b, atol=1e-12)
+    d = rig.jaw_displacement(0.7)
+    np.testing.assert_allclose(d[m] * flip, d, atol=1e-12)
+
+
+def _central(rig, region):
+    idx = rig.face.regions[region]
+    u = mouth_frame(rig.face).to_local(rig.rest[idx])[:, 0] / (rig.frame.width / 2)
+    return idx[np.abs(u) < 0.75], idx
+
+
+def test_lip_trimming(rig):
+    lower_c, lower = _central(rig, "lower_lip")
+    upper_c, upper = _central(rig, "upper_lip")
+    for m, b in zip(rig.muscles, rig.bases):
+        mag = np.linalg.norm(b, axis=1)
+        if m.lip == "upper":
+            assert np.all(mag[lower_c] == 0.0), m.name
+            assert mag[upper].max() > 0.0 or mag.max() > 0.0
+        elif m.lip == "lower":
+            assert np.all(mag[upper_c] == 0.0), m.name
+    # The jaw is a lower-lip function: the upper lip's centre stays put.
+    assert np.all(rig.jaw_displacement(1.0)[upper_c] == 0.0)
+
+
+def test_trim_weights_are_smooth_across_skin_edges(rig):
+    # No tear, no crease: across any quad edge of the skin (not the lips' slit or the
+    # cavity) the upper/lower split changes gradually.
+    face = rig.face
+    inner = np.zeros(face.n_vertices, bool)
+    for r in ("upper_lip", "lower_lip", "mouth_cavity"):
+        inner[face.regions[r]] = True
+    q = face.quads
+    edges = np.concatenate([q[:, [0, 1]], q[:, [1, 2]], q[:, [2, 3]], q[:, [3, 0]]])
+    skin = ~inner[edges].any(axis=1)
+    w = rig.upper_weight
+    jump = np.abs(w[edges[skin, 0]] - w[edges[skin, 1]])
+    assert jump.max() < 0.35
+    # Coincident seam vertices: the upper copy belongs to the upper lip, the lower copy to the lower.
+    up, lo = face.regions["lip_seam_upper"], face.regions["lip_seam_lower"]
+    central_up, _ = _central(rig, "lip_seam_upper")
+    central_lo, _ = _central(rig, "lip_seam_lower")
+    assert np.all(w[central_up] == 1.0) and np.all(w[central_lo] == 0.0)
+    assert len(up) and len(lo)
+
+
+def test_orbicularis_narrows_and_protrudes(rig):
+    rest = lip_dimensions(rig.face, rig.rest)
+    d = lip_dimensions(rig.face, rig.pose({"orbicularis_oris": 1.0}))
+    assert d["mouth_width"] < 0.8 * rest["mouth_width"]
+    assert d["protrusion"] > 0.005
+    half = lip_dimensions(rig.face, rig.pose({"orbicularis_oris": 0.5}))
+    assert d["mouth_width"] < half["mouth_width"] < rest["mouth_width"]
+
+
+def test_jaw_opens_with_largest_gap_at_centre(rig):
+    gauge = LipGauge(rig.face)
+    openings = [lip_dimensions(rig.face, rig.pose({"jaw": j}))["opening_height"] for j in (0, 0.25, 0.5, 1.0)]
+    assert openings[0] == pytest.approx(0.0, abs=1e-12)
+    assert np.all(np.diff(openings) > 0) and openings[-1] > 0.01
+    # Gap along the seam, from corner to corner: largest at the centre, smooth curve.
+    v = rig.pose({"jaw": 1.0})
+    up, lo = gauge._pairs.T
+    idx = gauge.indices
+    x = rig.rest[idx[up], 0]
+    gap = v[idx[up], 1] - v[idx[lo], 1]
+    assert np.argmax(gap) == np.argmin(np.abs(x))
+    order = np.argsort(np.abs(x))
+    assert np.all(np.diff(gap[order][::2]) <= 1e-12)
+    # Lower lip drops, chin drops and moves back; upper lip stays.
+    ch = lip_changes(rig.face, v)
+    assert ch["lower_lip_drop"] > 0.3 and ch["chin_drop"] > 0.3 and abs(ch["upper_lip_raise"]) < 0.01
+
+
+def test_negative_jaw_presses_lips(rig):
+    d = lip_dimensions(rig.face, rig.pose({"jaw": rig.ranges[-1, 0]}))
+    assert d["opening_height"] < 0 and d["lips_closed"] and d["lip_contact"] == 1.0
+
+
+def test_lower_lip_can_rise_under_upper_lip(rig):
+    # f/v: the lower lip moves up (and not forward) with mentalis.
+    ch = lip_changes(rig.face, rig.pose({"mentalis_left": 1, "mentalis_right": 1}))
+    assert ch["lower_lip_drop"] < -0.01
+
+
+def test_superposition_except_jaw(rig):
+    rng = np.random.default_rng(1)
+    a = rng.uniform(0, 0.5, len(rig.names))
+    b = rng.uniform(0, 0.5, len(rig.names))
+    a[-1] = b[-1] = 0.0
+    np.testing.assert_allclose(rig.displacement(a + b), rig.displacement(a) + rig.displacement(b), atol=1e-15)
+    np.testing.assert_allclose(rig.pose(a), rig.rest + np.tensordot(a[:-1], rig.bases, 1), atol=1e-15)
+    # The jaw adds its rotation to the muscles, but is not linear in its activation.
+    ja = rig.activation_vector({"jaw": 0.4})
+    np.testing.assert_allclose(rig.displacement(a + ja), rig.displacement(a) + rig.jaw_displacement(0.4),
+                               atol=1e-15)
+    assert not np.allclose(rig.jaw_displacement(0.8), 2 * rig.jaw_displacement(0.4), atol=1e-6)
+
+
+def test_poses_batch_matches_pose(rig):
+    rng = np.random.default_rng(2)
+    A = rng.uniform(0, 1, (4, len(rig.names)))
+    P = rig.poses(A)
+    assert P.shape == (4, rig.face.n_vertices, 3) and P.dtype == np.float32
+    for k in range(4):
+        np.testing.assert_allclose(P[k], rig.pose(A[k]), atol=1e-6)
+
+
+def test_same_rig_file_poses_other_resolution():
+    small = MuscleRig.from_file(default_face(resolution=1500))
+    ref = default_rig()
+    assert small.face.n_vertices < ref.face.n_vertices
+    pose = {"orbicularis_oris": 0.6, "jaw": 0.5, "zygomatic_major_left": 0.7, "depressor_labii_inferioris_right": 0.5}
+    a = lip_changes(small.face, small.pose(pose))
+    b = lip_changes(ref.face, ref.pose(pose))
+    for k in ("mouth_width", "opening_height", "protrusion", "lower_lip_drop", "corner_height_left"):
+        assert a[k] == pytest.approx(b[k], abs=0.03), k
+
+
+def test_same_rig_file_poses_loaded_obj(tmp_path):
+    from visemeface.face.mesh import load_face
+    ref = default_rig()
+    path, _ = ref.face.save(tmp_path / "face.obj")
+    face = load_face(path)
+    rig = MuscleRig.from_file(face)
+    pose = {"levator_labii_superioris_left": 1.0, "jaw": 0.3, "risorius_right": 0.5}
+    np.testing.assert_allclose(rig.pose(pose), ref.pose(pose), atol=1e-6)
+
+
+def test_unknown_and_bad_activations(rig):
+    with pytest.raises(InputError, match="did you mean: zygomatic_major_left"):
+        rig.activation_vector({"zygomatic_major_lft": 0.5})
+    with pytest.raises(InputError, match="risorius_left.*finite"):
+        rig.activation_vector({"risorius_left": float("nan")})
+    a = np.zeros(len(rig.names))
+    a[rig.index["mentalis_right"]] = np.inf
+    with pytest.raises(InputError, match="mentalis_right"):
+        rig.pose(a)
+    with pytest.raises(InputError, match="shape"):
+        rig.pose(np.zeros(3))
+    with pytest.raises(InputError, match="unknown muscle"):
+        rig.muscle("buccinator")
+
+
+def test_out_of_range_clamped_with_warning(rig):
+    with pytest.warns(UserWarning, match="jaw=3 -> 1.*|.*jaw"):
+        a = rig.activation_vector({"jaw": 3.0, "risorius_left": 0.5})
+    assert a[rig.index["jaw"]] == 1.0 and a[rig.index["risorius_left"]] == 0.5
+    with pytest.warns(UserWarning, match="orbicularis_oris"):
+        p = rig.pose({"orbicularis_oris": -1})
+    np.testing.assert_array_equal(p, rig.rest)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        rig.pose({"jaw": 1.0})
+
+
+def _write(tmp_path, text):
+    p = tmp_path / "rig.toml"
+    p.write_text(text)
+    return p
+
+
+def _default_text():
+    return data_path("rig", "default.toml").read_text()
+
+
+@pytest.mark.parametrize("old,new,field", [
+    ('zone_angle_deg = 28.0\nfalloff_start = 1.0\nfalloff_end = 1.5\nk = 0.13',
+     'zone_angle_deg = 200.0\nfalloff_start = 1.0\nfalloff_end = 1.5\nk = 0.13', "zone_angle_deg"),
+    ('attachment = {at = "cheek_{side}", offset = [0.35, 0.15, -0.1]}',
+     'attachment = {at = "cheeck_{side}", offset = [0.35, 0.15, -0.1]}', "attachment"),
+    ('insertion = {at = "mouth_corner_{side}", offset = [0.06, 0.02, -0.02]}',
+     'insertion = {at = "mouth_corner_{side}", offset = [0.06, 0.02]}', "insertion"),
+    ('kind = "linear"\nsides = ["left", "right"]\nlip = "both"\nrange = [0.0, 1.0]\nattachment = {at = "cheek_{side}", offset = [0.35',
+     'kind = "linear"\nsides = ["left", "right"]\nlip = "both"\nrange = [1.0, 0.0]\nattachment = {at = "cheek_{side}", offset = [0.35',
+     "range"),
+])
+def test_rig_file_errors_name_file_entry_field(tmp_path, old, new, field):
+    text = _default_text()
+    assert old in text
+    path = _write(tmp_path, text.replace(old, new, 1))
+    with pytest.raises(InputError) as exc:
+        MuscleRig.from_file(default_rig().face, path)
+    msg = str(exc.value)
+    assert str(path) in msg and "'zygomatic_major'" in msg and repr(field) in msg
+    # The line of the entry is given too.
+    assert f"{path}:" in msg
+
+
+def test_rig_file_syntax_and_missing(tmp_path):
+    face = default_rig().face
+    with pytest.raises(InputError, match="not valid TOML"):
+        MuscleRig.from_file(face, _write(tmp_path, "[trim\n"))
+    with pytest.raises(InputError, match="cannot read"):
+        MuscleRig.from_file(face, tmp_path / "missing.toml")
+    text = _default_text().replace('name = "mentalis"', 'name = "risorius"')
+    with pytest.raises(InputError, match="defined twice"):
+        MuscleRig.from_file(face, _write(tmp_path, text))
