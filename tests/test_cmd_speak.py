@@ -133,3 +133,203 @@ def test_speak_missing_transcript_exits_2(tmp_path, capsys, monkeypatch):
     assert code == 2 and "nope.txt: transcript not found" in err
     assert err.count("\n") == 1
     assert list(tmp_path.iterdir()) == []
+
+
+# ----------------------------------------------------------------------------- end to end
+# Small on purpose (0.8 s of speech, 128^2 frames): CI has 2 cores and no GPU.
+
+SHORT = """# short test utterance: silence, m, aa, p, silence
+0.00 0.10 _
+0.10 0.25 m
+0.25 0.45 aa
+0.45 0.60 p
+0.60 0.80 _
+"""
+N_SHORT = 24  # ceil(0.8 s * 30 fps)
+
+
+@pytest.fixture
+def short(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "short.txt").write_text(SHORT)
+    sf.write(tmp_path / "short.wav", 0.1 * np.sin(np.arange(12800) / 5.0).astype(np.float32), 16000)
+    return tmp_path
+
+
+def _glb_arrays(path):
+    import pygltflib
+
+    gl = pygltflib.GLTF2().load(str(path))
+    blob = gl.binary_blob()
+
+    def arr(i):
+        acc = gl.accessors[i]
+        view = gl.bufferViews[acc.bufferView]
+        ncomp = {"SCALAR": 1, "VEC3": 3, "VEC4": 4}[acc.type]
+        dtype = {5126: "<f4", 5123: "<u2", 5125: "<u4"}[acc.componentType]
+        a = np.frombuffer(blob, dtype, acc.count * ncomp, view.byteOffset + (acc.byteOffset or 0))
+        return a.reshape(acc.count, ncomp) if ncomp > 1 else a
+
+    return gl, arr
+
+
+def test_speak_end_to_end_all_exports(short, capsys):
+    from visemeface.muscles.rig import default_rig
+    from visemeface.render.renderer import Renderer
+    from visemeface.speech.timeline import load_track
+
+    code = main(["speak", "short.txt", "--size", "128", "--audio", "short.wav", "--frames", "fr",
+                 "--obj", "obj", "--pc2", "s.pc2", "--gltf", "s.glb", "--track", "s.csv"])
+    assert code == 0, capsys.readouterr().err
+    assert "24 frames" in capsys.readouterr().out
+    names = sorted(p.name for p in short.iterdir())
+    assert names == ["fr", "obj", "s.csv", "s.glb", "s.pc2", "short.mp4", "short.txt", "short.wav"]
+
+    # MP4: one frame per track row, audio muxed for exactly as long, starting at 0
+    info = export.read_video_info(short / "short.mp4")
+    assert info["n_frames"] == N_SHORT and info["size"] == (128, 128)
+    assert info["audio_samples"] / info["audio_rate"] == pytest.approx(N_SHORT / 30, abs=2e-3)
+
+    # the track, the point cache and the OBJ frames agree with the rig
+    rig = default_rig()
+    track = load_track(short / "s.csv")
+    assert len(track) == N_SHORT and track.attrs["fps"] == 30
+    pts, head = export.read_pc2(short / "s.pc2")
+    assert pts.shape == (N_SHORT, len(rig.face.vertices), 3) and head["num_samples"] == N_SHORT
+    a = pipeline.track_matrix(track, rig)
+    for i in (0, 8, 13):
+        np.testing.assert_allclose(pts[i], rig.pose(a[i]), atol=1e-6)
+    import trimesh
+    obj5 = trimesh.load(short / "obj" / export.frame_name(5, "obj"), process=False)
+    np.testing.assert_allclose(obj5.vertices, pts[5], atol=2e-6)
+    assert len(list((short / "obj").iterdir())) == N_SHORT
+
+    # the mouth is shut on /m/ (t = 0.2 s) and open on /aa/ (t = 0.35 s): geometry and pixels
+    lower, upper = rig.face.landmarks["lower_lip_mid"], rig.face.landmarks["upper_lip_mid"]
+    gap = pts[:, upper, 1] - pts[:, lower, 1]
+    assert gap[6] < 1e-3 and gap[10] > 5e-3
+    x, y, w, h = Renderer(rig.face, size=128).mouth_box()
+    dark = []
+    for i in (6, 10):
+        img = export.read_png(short / "fr" / export.frame_name(i))
+        box = img[max(0, y - h):y + 2 * h, x:x + w].astype(float)
+        dark.append(int(((box @ [0.299, 0.587, 0.114]) < 50).sum()))
+    assert dark[1] > dark[0] + 10
+    # the MP4 shows the same frames as the PNGs (lossy, so approximately)
+    import imageio_ffmpeg
+    gen = imageio_ffmpeg.read_frames(str(short / "short.mp4"))
+    next(gen)
+    for i, raw in enumerate(gen):
+        if i == 10:
+            vid = np.frombuffer(raw, np.uint8).reshape(128, 128, 3).astype(float)
+            png = export.read_png(short / "fr" / export.frame_name(10)).astype(float)
+            assert np.abs(vid - png).mean() < 4
+
+    # glTF: 25 muscle targets + jaw samples; plays the rig's poses; lasts the utterance
+    gl, arr = _glb_arrays(short / "s.glb")
+    prim = gl.meshes[0].primitives[0]
+    tnames = gl.meshes[0].extras["targetNames"]
+    assert tnames[:25] == list(rig.names[:25])
+    assert all(n.startswith("jaw@") for n in tnames[25:]) and len(tnames) >= 25 + pipeline.JAW_SAMPLES
+    assert len(prim.targets) == len(tnames)
+    sampler = gl.animations[0].samplers[0]
+    times = arr(sampler.input)
+    assert times[-1] == pytest.approx(0.8, abs=1e-6) and gl.accessors[sampler.input].max[0] == pytest.approx(0.8)
+    weights = arr(sampler.output).reshape(len(times), len(tnames))
+    rest = arr(prim.attributes.POSITION)
+    targets = np.stack([arr(t.POSITION if hasattr(t, "POSITION") else t["POSITION"]) for t in prim.targets])
+    for i in (0, 10, 13):
+        posed = rest + np.tensordot(weights[i], targets, axes=1)
+        np.testing.assert_allclose(posed, pts[i], atol=3e-5)  # jaw chord + float32
+
+
+def test_speak_resume_after_interruption_keeps_frames(short, capsys, monkeypatch):
+    from visemeface.render import renderer
+
+    calls = {"n": 0}
+    real = renderer.Renderer.render
+
+    def interrupted(self, vertices=None):
+        if calls["n"] == 9:
+            raise KeyboardInterrupt
+        calls["n"] += 1
+        return real(self, vertices)
+
+    monkeypatch.setattr(renderer.Renderer, "render", interrupted)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert main(["speak", "short.txt", "--size", "64", "--frames", "fr", "-q"]) == 130
+    assert "interrupted" in capsys.readouterr().err
+    partial = short / "fr.partial"
+    kept = sorted(partial.glob("frame_*.png"))
+    assert len(kept) == 9 and not (short / "fr").exists() and not (short / "short.mp4").exists()
+    before = {p.name: (p.stat().st_ino, p.stat().st_mtime_ns, p.read_bytes()) for p in kept}
+
+    def counting(self, vertices=None):
+        calls["n"] += 1
+        return real(self, vertices)
+
+    monkeypatch.setattr(renderer.Renderer, "render", counting)
+    calls["n"] = 0
+    # other settings cannot reuse them: refused before any rendering
+    assert main(["speak", "short.txt", "--size", "128", "--frames", "fr", "--resume", "-q"]) == 2
+    assert calls["n"] == 0
+    assert main(["speak", "short.txt", "--size", "64", "--frames", "fr", "--resume"]) == 0
+    assert "9 kept from the previous run" in capsys.readouterr().out
+    assert calls["n"] == N_SHORT - 9  # only the missing frames were rendered
+    for name, (ino, mtime, data) in before.items():
+        p = short / "fr" / name
+        assert (p.stat().st_ino, p.stat().st_mtime_ns) == (ino, mtime)
+    assert len(list((short / "fr").glob("frame_*.png"))) == N_SHORT
+    assert export.read_video_info(short / "short.mp4")["n_frames"] == N_SHORT
+    # rendering is deterministic: a kept frame is what a fresh render gives
+    monkeypatch.setattr(renderer.Renderer, "render", real)
+    assert main(["speak", "short.txt", "--size", "64", "--frames", "fr2", "--no-video", "-q"]) == 0
+    for name, (_, _, data) in before.items():
+        np.testing.assert_array_equal(export.read_png(short / "fr2" / name), export.read_png(short / "fr" / name))
+
+
+@pytest.mark.parametrize("content, audio, message", [
+    ("0.0 0.2 _\n0.2 0.4 qq\n", None, "short.txt:2"),                 # unknown phone
+    ("0.0 0.3 _\n0.2 0.4 m\n0.4 0.5 _\n", None, "short.txt:"),           # overlapping times
+    (SHORT, "bad.wav", "bad.wav: unreadable audio"),                     # unreadable audio
+])
+def test_speak_bad_input_leaves_nothing(short, capsys, content, audio, message):
+    (short / "short.txt").write_text(content)
+    (short / "bad.wav").write_bytes(b"RIFF-garbage")
+    before = sorted(p.name for p in short.iterdir())
+    argv = ["speak", "short.txt", "--size", "64", "--frames", "fr", "--pc2", "a.pc2", "--gltf", "a.glb"]
+    if audio:
+        argv += ["--audio", audio]
+    code = main(argv)
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and err.count("\n") == 1, err
+    assert sorted(p.name for p in short.iterdir()) == before
+
+
+def test_speak_refuses_existing_output(short, capsys):
+    (short / "short.mp4").write_bytes(b"mine")
+    assert main(["speak", "short.txt", "--size", "64", "--pc2", "a.pc2"]) == 2
+    assert "short.mp4: output exists; use --force" in capsys.readouterr().err
+    assert (short / "short.mp4").read_bytes() == b"mine" and not (short / "a.pc2").exists()
+    assert main(["speak", "short.txt", "--size", "64", "--force", "-q"]) == 0
+    assert export.read_video_info(short / "short.mp4")["n_frames"] == N_SHORT
+
+
+def test_say_text_to_video(short, capsys):
+    from visemeface.speech.timeline import load_track
+
+    assert main(["say", "mama", "--size", "64", "--track", "say.csv", "--emotion", "happiness=0.5"]) == 0
+    track = load_track(short / "say.csv")
+    info = export.read_video_info(short / "say.mp4")
+    assert info["n_frames"] == len(track) > 5
+    assert track["zygomatic_major_left"].max() > 0  # the emotion is in the track
+    assert main(["say", "mama", "--size", "64", "--emotion", "hapiness", "-o", "x.mp4"]) == 2
+    assert "did you mean: happiness" in capsys.readouterr().err
+
+
+def test_speak_formats_match_reader():
+    from visemeface.commands.speak import FORMATS
+    from visemeface.speech.transcripts import FORMATS as READER_FORMATS
+
+    assert set(FORMATS) == {"auto", *READER_FORMATS}

@@ -46,7 +46,7 @@ import pandas as pd
 
 from visemeface import __version__
 from visemeface.errors import InputError, close_matches
-from visemeface.outputs import atomic_output, check_new, progress
+from visemeface.outputs import check_new, progress
 from visemeface.render import export
 
 #: Jaw openings (as fractions of the jaw's range) exported as glTF morph targets.
@@ -177,12 +177,21 @@ def morph_weights(a: np.ndarray, rig, samples: np.ndarray) -> np.ndarray:
 
 
 def write_gltf(path, rig, track: pd.DataFrame, force: bool = False,
-               jaw_samples: int = JAW_SAMPLES) -> None:
-    """Write the rig's face with morph targets and ``track`` as a morph animation (.glb)."""
+               jaw_samples: int = JAW_SAMPLES, end_time: float | None = None) -> None:
+    """Write the rig's face with morph targets and ``track`` as a morph animation (.glb).
+
+    Keyframes are the track's rows (one a frame, LINEAR between them). The
+    track's last row lies up to one frame before the end of the utterance;
+    with ``end_time`` a final keyframe holding the last pose is added there,
+    so the animation lasts exactly as long as the utterance.
+    """
     a = track_matrix(track, rig)
     targets, names, samples = rig_morph_targets(rig, jaw_samples)
     face = rig.face
     times = track.index.to_numpy(dtype=np.float64)
+    if end_time is not None and end_time > times[-1] + 1e-6:
+        times = np.append(times, end_time)
+        a = np.vstack([a, a[-1:]])
     export.write_morph_animation_glb(path, face.vertices, face.triangles, targets, names, times,
                                      morph_weights(a, rig, samples), colors=face.vertex_colors(),
                                      normals=face.vertex_normals(), force=force)
@@ -365,13 +374,8 @@ class RenderSettings:
     stats: dict = field(default_factory=dict)
 
 
-def write_track_csv(path, track: pd.DataFrame, force: bool = False) -> None:
-    """Save an activation track as CSV (``time`` column then rig functions), atomically."""
-    with atomic_output(path, force) as tmp:
-        track.to_csv(tmp, index=True, index_label="time", float_format="%.6g")
-
-
-def animate(track: pd.DataFrame, rig, out: Outputs, settings: RenderSettings) -> dict:
+def animate(track: pd.DataFrame, rig, out: Outputs, settings: RenderSettings,
+            end_time: float | None = None) -> dict:
     """Pose, render and export every frame of ``track``, streaming.
 
     Parameters
@@ -384,6 +388,8 @@ def animate(track: pd.DataFrame, rig, out: Outputs, settings: RenderSettings) ->
         Files to write (checked again here, before rendering).
     settings : RenderSettings
         Frame size, view, frame rate, audio to mux.
+    end_time : float, optional
+        End of the utterance (s), where the glTF animation ends.
 
     Returns
     -------
@@ -447,8 +453,10 @@ def animate(track: pd.DataFrame, rig, out: Outputs, settings: RenderSettings) ->
         if frames is not None:
             frames.finish(n)
         if out.gltf is not None:
-            write_gltf(out.gltf, rig, track, force=out.force)
+            write_gltf(out.gltf, rig, track, force=out.force, end_time=end_time)
         if out.track is not None:
-            write_track_csv(out.track, track, force=out.force)
+            from visemeface.speech.timeline import save_track
+
+            save_track(track, out.track, force=out.force)
     return {"frames": n, "kept": frames.kept if frames else 0,
             "rendered": (n - frames.kept) if (frames and need_image) else (n if need_image else 0)}

@@ -98,9 +98,10 @@ def render_segments(segments, args, out, settings) -> int:
 
     rig = default_rig()
     emotions = parse_emotions(args.emotion, load_expressions(rig=rig).index)
+    ranges = {n: tuple(r) for n, r in zip(rig.names, rig.ranges)}
     track = activation_track(segments, load_visemes(rig=rig), fps=args.fps, mode=args.interp,
-                             emotions=emotions or None)
-    stats = animate(track, rig, out, settings)
+                             emotions=emotions or None, ranges=ranges)
+    stats = animate(track, rig, out, settings, end_time=float(segments["end"].iloc[-1]))
     if not args.quiet:
         written = [str(p) for p in out.paths().values()]
         extra = f", {stats['kept']} kept from the previous run" if stats["kept"] else ""
