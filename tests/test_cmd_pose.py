@@ -1,0 +1,84 @@
+"""The `pose` and `muscles` commands: rendering, overlays, errors and exit codes."""
+
+import cv2
+import numpy as np
+import pytest
+
+from visemeface.cli import main
+
+
+def read(path):
+    img = cv2.imread(str(path))
+    assert img is not None
+    return img[:, :, ::-1]
+
+
+def test_pose_renders_and_differs_from_rest(tmp_path, capsys):
+    rest, posed = tmp_path / "rest.png", tmp_path / "open.png"
+    assert main(["pose", "-o", str(rest), "--size", "128", "--view", "mouth"]) == 0
+    assert main(["pose", "--set", "jaw=0.8", "--set", "orbicularis_oris=0.3", "-o", str(posed),
+                 "--size", "128", "--view", "mouth"]) == 0
+    out = capsys.readouterr().out
+    assert "jaw=0.8" in out and "opening_height=" in out
+    a, b = read(rest).astype(int), read(posed).astype(int)
+    assert a.shape == (128, 128, 3)
+    # The open mouth shows the dark cavity: many more dark pixels than at rest.
+    dark = lambda im: int((im.sum(axis=2) < 120).sum())  # noqa: E731
+    assert dark(b) > dark(a) + 200
+
+
+def test_show_muscles_draws_over_render(tmp_path):
+    plain, drawn = tmp_path / "plain.png", tmp_path / "drawn.png"
+    assert main(["pose", "--set", "risorius_left=1", "-o", str(plain), "--size", "128"]) == 0
+    assert main(["pose", "--set", "risorius_left=1", "--show-muscles", "-o", str(drawn), "--size", "128"]) == 0
+    diff = np.abs(read(plain).astype(int) - read(drawn).astype(int)).sum(axis=2)
+    assert (diff > 60).sum() > 300
+
+
+def test_existing_output_needs_force(tmp_path, capsys):
+    out = tmp_path / "p.png"
+    out.write_bytes(b"x")
+    assert main(["pose", "-o", str(out), "--size", "64"]) == 2
+    assert "--force" in capsys.readouterr().err
+    assert out.read_bytes() == b"x"
+    assert main(["pose", "-o", str(out), "--size", "64", "--force"]) == 0
+    assert read(out).shape == (64, 64, 3)
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["--set", "zygomatic_major_lft=0.5"], "did you mean: zygomatic_major_left"),
+    (["--set", "jaw"], "NAME=VALUE"),
+    (["--set", "jaw=wide"], "not a number"),
+    (["--set", "jaw=nan"], "'jaw'"),
+    (["--size", "100"], "multiples of 16"),
+])
+def test_bad_input_exits_2_with_one_line(tmp_path, capsys, argv, message):
+    out = tmp_path / "bad.png"
+    assert main(["pose", *argv, "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and len(err.splitlines()) == 1
+    assert not out.exists()
+
+
+def test_clamping_warns(tmp_path, capsys):
+    assert main(["pose", "--set", "jaw=2", "-o", str(tmp_path / "c.png"), "--size", "64"]) == 0
+    assert "clamped" in capsys.readouterr().err
+
+
+def test_muscles_lists_all_functions(capsys):
+    assert main(["muscles", "--csv"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert lines[0].startswith("name,kind,side,min,max,lip")
+    assert len(lines) == 1 + 26
+    assert any(line.startswith("orbicularis_oris,sphincter,centre,0.0,1.0,both") for line in lines)
+    assert main(["muscles"]) == 0
+    assert "depressor_labii_inferioris_left" in capsys.readouterr().out
+
+
+def test_posture_and_emotion_from_library(tmp_path, capsys):
+    pytest.importorskip("visemeface.postures.library")
+    out = tmp_path / "aa.png"
+    assert main(["pose", "aa", "--emotion", "happiness=0.5", "-o", str(out), "--size", "64"]) == 0
+    text = capsys.readouterr().out
+    assert "jaw=" in text and "zygomatic_major_left=" in text
+    assert main(["pose", "aaa", "-o", str(tmp_path / "x.png"), "--size", "64"]) == 2
