@@ -230,10 +230,9 @@ class Renderer:
         extra = [lm[k] for k in ("upper_lip_top", "lower_lip_bottom") if k in lm]
         if extra:
             ys = np.concatenate([ys, self.project(self.face.vertices[extra])[:, 1]])
-        x0, x1 = pts[:, 0].min(), pts[:, 0].max()
-        y0, y1 = ys.min(), ys.max()
-        return (int(math.floor(x0)), int(math.floor(y0)),
-                int(round(x1 - x0)), max(1, int(round(y1 - y0))))
+        x0, x1 = round(pts[:, 0].min()), round(pts[:, 0].max())
+        y0, y1 = round(ys.min()), round(ys.max())
+        return int(x0), int(y0), int(x1 - x0), max(1, int(y1 - y0))
 
     def camera_info(self) -> dict:
         """JSON-able description of the camera (for an analysis sidecar)."""
@@ -302,19 +301,20 @@ class Renderer:
         if v.shape != (self.face.n_vertices, 3):
             raise InputError(f"vertices must have shape ({self.face.n_vertices}, 3), got {v.shape}")
         self._vbo_data[:, :3] = v
-        self._vbo_data[:, 3:] = self._normals(v)
-        self.vbo.write(self._vbo_data)
+        self._vbo_data[:, 3:] = self._normals(v, dtype=np.float32)
         ctx = self.ctx
-        self.fbo_ms.use()
-        ctx.enable(moderngl.DEPTH_TEST)
-        ctx.disable(moderngl.CULL_FACE)
-        ctx.clear(*BACKGROUND, 1.0, depth=1.0)
-        self.vao.render(moderngl.TRIANGLES)
-        if self.fbo_ms is not self.fbo:
-            ctx.copy_framebuffer(self.fbo, self.fbo_ms)
         w, h = self.size
-        raw = np.frombuffer(self.fbo.read(components=3, alignment=1), dtype=np.uint8).reshape(h, w, 3)
-        return raw[::-1].copy()
+        with ctx:   # make this renderer's context current (several renderers may coexist)
+            self.vbo.write(self._vbo_data)
+            self.fbo_ms.use()
+            ctx.enable(moderngl.DEPTH_TEST)
+            ctx.disable(moderngl.CULL_FACE)
+            ctx.clear(*BACKGROUND, 1.0, depth=1.0)
+            self.vao.render(moderngl.TRIANGLES)
+            if self.fbo_ms is not self.fbo:
+                ctx.copy_framebuffer(self.fbo, self.fbo_ms)
+            raw = np.frombuffer(self.fbo.read(components=3, alignment=1), dtype=np.uint8)
+        return raw.reshape(h, w, 3)[::-1].copy()
 
     def release(self):
         """Free the GL objects and context (also done when garbage-collected)."""
