@@ -71,3 +71,157 @@ def test_targets_errors_name_file_line_and_column(tmp_path):
         lib.load_targets(_write(tmp_path, "\n".join(src[:-1])))
     with pytest.raises(InputError, match="file not found"):
         lib.load_targets(tmp_path / "nope.csv")
+
+
+# ----------------------------------------------------------------------------- tables on the rig
+
+
+@pytest.fixture(scope="module")
+def rig():
+    from visemeface.muscles.rig import default_rig
+
+    return default_rig()
+
+
+@pytest.fixture(scope="module")
+def visemes(rig):
+    return lib.load_visemes(rig=rig)
+
+
+@pytest.fixture(scope="module")
+def expressions(rig):
+    return lib.load_expressions(rig=rig)
+
+
+def test_visemes_table_is_56_postures_of_the_12_speech_functions(rig, visemes):
+    assert visemes.index.tolist() == list(DECTALK)
+    assert visemes.columns.tolist() == list(rig.names)
+    others = [c for c in rig.names if c not in lib.SPEECH_FUNCTIONS]
+    assert (visemes[others] == 0).all().all()
+    assert len(lib.SPEECH_FUNCTIONS) == 12
+    lo, hi = rig.ranges[:, 0], rig.ranges[:, 1]
+    assert ((visemes.to_numpy() >= lo) & (visemes.to_numpy() <= hi)).all()
+    assert (visemes.loc["_"] == 0).all()
+    # left/right symmetric
+    for f in lib.SPEECH_FUNCTIONS:
+        if f.endswith("_left"):
+            np.testing.assert_array_equal(visemes[f], visemes[f.replace("_left", "_right")])
+
+
+def test_visemes_reach_their_lip_targets(rig, visemes, targets):
+    """The fitted activations reproduce the lip-shape targets on the rig (within 0.1 mouth width)."""
+    from visemeface.muscles.measure import LipGauge
+
+    gauge = LipGauge(rig.face)
+    for sym in ["p", "f", "ow", "w", "ae", "aa", "sh", "r", "ao", "iy"]:
+        got = gauge.changes(rig.pose(visemes.loc[sym].to_numpy()))
+        for k in lib.TARGET_DIMENSIONS:
+            assert abs(got[k] - targets.loc[sym, k]) < 0.1, (sym, k, got[k], targets.loc[sym, k])
+    closed = gauge.measure(rig.pose(visemes.loc["m"].to_numpy()))
+    assert closed["lips_closed"]
+
+
+def test_expressions_seven_emotions_facs_and_one_sided_contempt(rig, expressions):
+    assert set(lib.EMOTIONS) <= set(expressions.index)
+    assert expressions.columns.tolist() == list(rig.names)
+    info = lib.expression_info()
+    assert info.loc["happiness", "action_units"].count("AU12") == 1
+    assert expressions.loc["happiness", "zygomatic_major_left"] > 0.5
+    assert expressions.loc["surprise", "jaw"] > 0 and expressions.loc["sadness", "depressor_anguli_oris_left"] > 0
+    for e in expressions.index:
+        row = expressions.loc[e]
+        left = row[[c for c in row.index if c.endswith("_left")]].to_numpy()
+        right = row[[c.replace("_left", "_right") for c in row.index if c.endswith("_left")]].to_numpy()
+        if e == "contempt":
+            assert left.sum() > 0 and right.sum() == 0
+        else:
+            np.testing.assert_array_equal(left, right)
+
+
+def _table_text(path):
+    return path.read_text().splitlines()
+
+
+def test_activation_table_errors_name_file_line_column(tmp_path, rig):
+    src = _table_text(lib.expressions_file())
+    bad = src[:]
+    bad[0] = bad[0].replace("zygomatic_major_left", "zygomatic_majr_left", 1)
+    with pytest.raises(InputError, match=r"e\.csv:1: column 'zygomatic_majr_left' is not a function of the rig "
+                                         r"\(did you mean: zygomatic_major_left"):
+        lib.load_expressions(_write(tmp_path, "\n".join(bad), "e.csv"), rig=rig)
+    bad = src[:]
+    bad[2] = bad[2].replace("sadness,0,", "sadness,7,", 1)
+    with pytest.raises(InputError, match=r"e\.csv:3: column 'zygomatic_major_left': 7 is outside the range \[0, 1\]"):
+        lib.load_expressions(_write(tmp_path, "\n".join(bad), "e.csv"), rig=rig)
+    bad = src[:]
+    bad[2] = bad[2].replace("sadness,0,", "sadness,nan,", 1)
+    with pytest.raises(InputError, match=r"e\.csv:3: .*not a finite number"):
+        lib.load_expressions(_write(tmp_path, "\n".join(bad), "e.csv"), rig=rig)
+    with pytest.raises(InputError, match="emotions missing: disgust"):
+        lib.load_expressions(_write(tmp_path, "\n".join(src[:-1]), "e.csv"), rig=rig)
+    vis = _table_text(lib.visemes_file())
+    with pytest.raises(InputError, match=r"v\.csv:58: symbol 'jh' appears twice"):
+        lib.load_visemes(_write(tmp_path, "\n".join(vis + vis[-1:]), "v.csv"), rig=rig)
+    with pytest.raises(InputError, match=r"postures missing: jh"):
+        lib.load_visemes(_write(tmp_path, "\n".join(vis[:-1]), "v.csv"), rig=rig)
+
+
+# ----------------------------------------------------------------------------- blending
+
+
+def test_blend_is_weighted_sum_then_clamp(rig, visemes, expressions):
+    lo, hi = rig.ranges[:, 0], rig.ranges[:, 1]
+    v, e1, e2 = visemes.loc["ah"].to_numpy(), expressions.loc["happiness"].to_numpy(), expressions.loc["surprise"].to_numpy()
+    a = lib.blend("ah", {"happiness": 0.5, "surprise": 0.25}, w_viseme=0.8, rig=rig)
+    assert a.index.tolist() == list(rig.names)
+    np.testing.assert_allclose(a.to_numpy(), np.clip(0.8 * v + 0.5 * e1 + 0.25 * e2, lo, hi))
+    # the pure expression: silence viseme carries no activation
+    np.testing.assert_allclose(lib.blend("_", {"anger": 1.0}, rig=rig).to_numpy(), expressions.loc["anger"].to_numpy())
+    # viseme alone, default weight
+    np.testing.assert_allclose(lib.blend("ow", rig=rig).to_numpy(), visemes.loc["ow"].to_numpy())
+    # weights 0 leave the neutral face
+    assert (lib.blend("aa", {"fear": 0}, w_viseme=0, rig=rig) == 0).all()
+
+
+def test_blend_clamps_to_the_rig_ranges(rig, visemes):
+    hi = rig.ranges[:, 1]
+    a = lib.blend("ah", {"happiness": 3.0}, rig=rig)
+    j = rig.names.index("zygomatic_major_left")
+    assert a.iloc[j] == hi[j]  # 3·1.0 summed with the viseme, clamped to the top of the range
+    assert (a.to_numpy() <= hi).all() and (a.to_numpy() >= rig.ranges[:, 0]).all()
+    big = lib.blend("aa", {}, w_viseme=10, rig=rig)
+    np.testing.assert_allclose(big.to_numpy(), np.clip(10 * visemes.loc["aa"].to_numpy(), rig.ranges[:, 0], hi))
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda r: lib.blend("ahh", {}, rig=r), r"unknown viseme 'ahh' \(did you mean: ah"),
+    (lambda r: lib.blend("ah", {"hapiness": 1}, rig=r), r"unknown emotion 'hapiness' \(did you mean: happiness"),
+    (lambda r: lib.blend("ah", {"happiness": -0.1}, rig=r), "weight of 'happiness' must not be negative"),
+    (lambda r: lib.blend("ah", {"happiness": float("nan")}, rig=r), "weight of 'happiness' must be finite"),
+    (lambda r: lib.blend("ah", {"happiness": "x"}, rig=r), "must be a number"),
+    (lambda r: lib.blend("ah", {}, w_viseme=-1, rig=r), "weight of 'viseme' must not be negative"),
+    (lambda r: lib.blend("ah", {}, w_viseme=math.inf, rig=r), "must be finite"),
+])
+def test_blend_bad_input(rig, call, message):
+    with pytest.raises(InputError, match=message):
+        call(rig)
+
+
+def test_posed_vertices_is_the_rig_pose_of_the_blend(rig):
+    v = lib.posed_vertices(rig, "ah", {"happiness": 0.6})
+    np.testing.assert_allclose(v, rig.pose(lib.blend("ah", {"happiness": 0.6}, rig=rig).to_numpy()))
+    assert v.shape == rig.rest.shape
+    # the happy /ah/ raises the mouth corners above the plain /ah/
+    from visemeface.muscles.measure import LipGauge
+
+    g = LipGauge(rig.face)
+    assert g.changes(v)["corner_height"] > g.changes(lib.posed_vertices(rig, "ah"))["corner_height"] + 0.01
+
+
+def test_parse_weights():
+    assert lib.parse_weights(["happiness=0.6", "fear"]) == {"happiness": 0.6, "fear": 1.0}
+    assert lib.parse_weights("anger=0.2, sadness=0.3") == {"anger": 0.2, "sadness": 0.3}
+    assert lib.parse_weights(None) == {}
+    for bad, msg in [("anger=-1", "negative"), ("anger=nan", "finite"), ("=2", "NAME=WEIGHT"), ("anger=x", "number")]:
+        with pytest.raises(InputError, match=msg):
+            lib.parse_weights(bad)

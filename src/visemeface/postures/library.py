@@ -35,27 +35,12 @@ import numpy as np
 import pandas as pd
 
 from visemeface.errors import InputError, close_matches
+from visemeface.muscles.measure import TARGET_DIMENSIONS  # lip-shape target columns, re-exported
+from visemeface.muscles.rig import SPEECH_FUNCTIONS  # seed 002 Table 1, re-exported
 from visemeface.resources import data_path
-
-#: Seed 002 Table 1: the twelve functions used for speech postures.
-SPEECH_FUNCTIONS: tuple[str, ...] = (
-    "orbicularis_oris",
-    "risorius_left", "risorius_right",
-    "depressor_labii_inferioris_left", "depressor_labii_inferioris_right",
-    "levator_labii_superioris_left", "levator_labii_superioris_right",
-    "zygomatic_major_left", "zygomatic_major_right",
-    "depressor_anguli_oris_left", "depressor_anguli_oris_right",
-    "jaw",
-)
 
 #: The seven emotions every expression table must provide (seed 002's six + disgust).
 EMOTIONS: tuple[str, ...] = ("happiness", "sadness", "surprise", "fear", "anger", "contempt", "disgust")
-
-#: Lip-shape target columns of ``targets.csv``: change from rest, in fractions
-#: of the rest mouth width (names as ``visemeface.muscles.measure.lip_dimensions``).
-TARGET_DIMENSIONS: tuple[str, ...] = (
-    "mouth_width", "opening_height", "protrusion", "upper_lip_raise", "lower_lip_drop", "corner_height",
-)
 
 _TARGET_RANGE = (-1.0, 1.0)  # a lip moving by more than a mouth width is a typo
 
@@ -298,20 +283,24 @@ def expression_info(path: str | Path | None = None) -> pd.DataFrame:
     return df[["emotion", "action_units"]].set_index("emotion")
 
 
-_TABLES: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+_TABLES: dict[int, tuple] = {}
 
 
 def _tables(rig) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """Shipped tables validated against ``rig``, loaded once per rig object."""
-    try:
-        return _TABLES[rig]
-    except (KeyError, TypeError):
-        pass
+    """Shipped tables validated against ``rig``, loaded once per rig object.
+
+    Keyed by object identity (rigs compare equal to each other); the entry is
+    dropped when the rig is garbage-collected.
+    """
+    hit = _TABLES.get(id(rig))
+    if hit is not None and hit[0]() is rig:
+        return hit[1]
     tables = (load_visemes(rig=rig), load_expressions(rig=rig))
     try:
-        _TABLES[rig] = tables
-    except TypeError:  # rig not weak-referenceable: no cache
-        pass
+        ref = weakref.ref(rig, lambda _r, key=id(rig): _TABLES.pop(key, None))
+    except TypeError:  # not weak-referenceable: no cache
+        return tables
+    _TABLES[id(rig)] = (ref, tables)
     return tables
 
 
