@@ -456,20 +456,24 @@ def _parse_phn(text, where, sample_rate=16000.0, **_):
     return rows
 
 
-def _pick_tier(names: list[str], tier, where) -> str:
+def _pick_tier(names: list[str], tier, where, line: int | None = None) -> str:
     if tier is not None:
         if tier in names:
             return tier
-        raise InputError(f"no tier {tier!r}; tiers: {', '.join(names)}{close_matches(tier, names)}", where)
+        hint = close_matches(tier, names)
+        containing = [n for n in names if tier.lower() in n.lower()]
+        if not hint and containing:
+            hint = f" (did you mean: {', '.join(containing[:3])}?)"
+        raise InputError(f"no tier {tier!r}; tiers: {', '.join(names)}{hint}", where, line)
     phones = [n for n in names if n.lower() in ("phones", "phone", "phonemes", "phoneme")
               or n.lower().endswith((" - phones", "- phones", "-phones", "_phones"))]
     if len(phones) == 1:
         return phones[0]
     if len(phones) > 1:
-        raise InputError(f"several phone tiers ({', '.join(phones)}); choose one with --tier", where)
+        raise InputError(f"several phone tiers ({', '.join(phones)}); choose one with --tier", where, line)
     if len(names) == 1:
         return names[0]
-    raise InputError(f"no phone tier among {', '.join(names) or 'no tiers'}; choose one with --tier", where)
+    raise InputError(f"no phone tier among {', '.join(names) or 'no tiers'}; choose one with --tier", where, line)
 
 
 def _parse_textgrid(text, where, tier=None, **_):
@@ -570,6 +574,8 @@ def _parse_mfa_csv(text, where, tier=None, **_):
     except csv.Error as exc:
         raise InputError(f"bad CSV: {exc}", where, reader.line_num) from None
     records = [(n, r) for n, r in records if any(c.strip() for c in r)]
+    if not records:
+        raise InputError("no rows after the CSV header", where, 1)
     keys = []
     for n, r in records:
         if len(r) <= max(ib, ie, il, it or 0, isp or 0):
@@ -582,7 +588,7 @@ def _parse_mfa_csv(text, where, tier=None, **_):
         # allow --tier phones when there is a single speaker
         alt = [k for k in names if k.endswith(" - " + tier)]
         tier = alt[0] if len(alt) == 1 else tier
-    name = _pick_tier(names, tier, where)
+    name = _pick_tier(names, tier, where, line=1)    # the tiers are named by the Type/Speaker columns
     rows = []
     for (n, r), key in zip(records, keys):
         if key != name:
