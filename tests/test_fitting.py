@@ -47,7 +47,7 @@ def test_achieves_reachable_viseme_like_targets(rig):
     got = lip_changes(rig.face, rig.pose(fit))
     for k, v in targets.items():
         assert got[k] == pytest.approx(v, abs=0.01), k
-        assert fit.attrs["achieved"][k] == pytest.approx(got[k], abs=1e-9)
+        assert fit.attrs["achieved"][k] == pytest.approx(got[k], abs=1e-6)  # rig.pose is float32
     assert fit["orbicularis_oris"] > 0.5
 
 

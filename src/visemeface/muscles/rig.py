@@ -338,18 +338,56 @@ class MuscleRig:
         self.jaw_weight = jw
         self.jaw_joints = (face.landmark_position(jaw["joints"][0]), face.landmark_position(jaw["joints"][1]))
         self.max_jaw_angle = jaw["max_angle"]
-        # Fast path: only vertices that something moves.
-        moving = np.any(bases != 0.0, axis=(0, 2))
-        self._active = np.flatnonzero(moving | (jw > 0))
-        self._flat = np.ascontiguousarray(bases[:, self._active].reshape(len(muscles), -1))
         self._jaw_idx = np.flatnonzero(jw > 0)
-        self._jaw_pos = np.searchsorted(self._active, self._jaw_idx)
         jl, jr = self.jaw_joints
         kax = (jl - jr) / np.linalg.norm(jl - jr)
         r = rest[self._jaw_idx] - jr
         self._jaw_perp = r - np.outer(r @ kax, kax)
         self._jaw_cross = np.cross(kax, r)
         self._jaw_w = jw[self._jaw_idx]
+        self._build_fast_path()
+
+    def _build_fast_path(self, tolerance: float = 1e-10):
+        r"""One matrix for the whole pose: muscle bases plus a Taylor series of the jaw.
+
+        With :math:`\theta_i = \theta w_i` the jaw term is
+        :math:`(\cos\theta_i - 1)\,\mathbf r_\perp + \sin\theta_i\,(\mathbf k \times \mathbf r)
+        = \sum_{j \ge 1} \theta^j\, C_j` with
+        :math:`C_j = w_i^j\,(-1)^{\lfloor j/2 \rfloor} / j!` times
+        :math:`\mathbf r_\perp` (even j) or :math:`\mathbf k \times \mathbf r` (odd j).
+        The series is cut at the degree whose next term is below ``tolerance``
+        metres for every angle in the jaw's range, so a pose is one product
+        :math:`[\mathbf a, \theta, \theta^2, \dots] \cdot B` (exactness is
+        checked against :meth:`jaw_displacement` in the tests).
+        """
+        from math import factorial
+
+        n = len(self.rest)
+        lo, hi = self.jaw["range"]
+        theta_max = max(abs(lo), abs(hi)) * self.max_jaw_angle * (self._jaw_w.max() if len(self._jaw_w) else 0.0)
+        radius = float(np.linalg.norm(np.hstack([self._jaw_perp, self._jaw_cross]), axis=1).max()) \
+            if len(self._jaw_w) else 0.0
+        degree = 1
+        while theta_max ** (degree + 1) / factorial(degree + 1) * radius > tolerance and degree < 40:
+            degree += 1
+        self._jaw_degree = degree
+        rows = [self.bases.reshape(len(self.muscles), 3 * n)]
+        for j in range(1, degree + 1):
+            c = np.zeros((n, 3))
+            sign = (-1.0) ** (j // 2)
+            vec = self._jaw_cross if j % 2 else self._jaw_perp
+            c[self._jaw_idx] = (sign / factorial(j)) * (self._jaw_w ** j)[:, None] * vec
+            rows.append(c.reshape(1, 3 * n))
+        # float32 halves the memory traffic of the product (the pose's cost); displacements are
+        # millimetres, so the rounding is below a nanometre. Positions stay float64.
+        self._matrix = np.ascontiguousarray(np.vstack(rows), dtype=np.float32)
+        self._rest_flat = self.rest.reshape(-1)
+        self._powers = np.arange(1, degree + 1)
+
+    def _coefficients(self, a: np.ndarray) -> np.ndarray:
+        """``[a_muscles, theta, theta^2, ...]`` for activations (..., M+1)."""
+        theta = a[..., -1:] * self.max_jaw_angle
+        return np.concatenate([a[..., :-1], theta ** self._powers], axis=-1).astype(np.float32)
 
     # ---------------------------------------------------------------- build
     @staticmethod
@@ -473,22 +511,12 @@ class MuscleRig:
     def displacement(self, a) -> np.ndarray:
         """Displacement (N, 3) from rest: :math:`\\sum_m a_m B_m + J(a_{jaw})`."""
         a = self._vector(a)
-        out = np.zeros_like(self.rest)
-        out[self._active] = self._active_displacement(a)
-        return out
-
-    def _active_displacement(self, a: np.ndarray) -> np.ndarray:
-        d = (a[:-1] @ self._flat).reshape(-1, 3)
-        if a[-1] != 0.0:
-            d[self._jaw_pos] += self._jaw_term(a[-1])
-        return d
+        return (self._coefficients(a) @ self._matrix).astype(np.float64).reshape(-1, 3)
 
     def pose(self, a) -> np.ndarray:
         """Posed vertices (N, 3): rest + :meth:`displacement`. ``a``: mapping or vector in ``names`` order."""
         a = self._vector(a)
-        out = self.rest.copy()
-        out[self._active] += self._active_displacement(a)
-        return out
+        return (self._rest_flat + self._coefficients(a) @ self._matrix).reshape(-1, 3)
 
     def poses(self, activations) -> np.ndarray:
         """Posed vertices (F, N, 3) float32 for activations (F, M+1) (or a DataFrame with rig columns)."""
@@ -509,13 +537,9 @@ class MuscleRig:
             warnings.warn("activations clamped to the muscles' ranges: "
                           + ", ".join(self.names[i] for i in np.flatnonzero(bad)), stacklevel=2)
             A = np.clip(A, lo, hi)
-        out = np.broadcast_to(self.rest.astype(np.float32), (len(A),) + self.rest.shape).copy()
-        d = (A[:, :-1] @ self._flat).reshape(len(A), -1, 3)
-        theta = (A[:, -1:] * self.max_jaw_angle) * self._jaw_w[None, :]
-        d[:, self._jaw_pos] += ((np.cos(theta) - 1.0)[..., None] * self._jaw_perp
-                                + np.sin(theta)[..., None] * self._jaw_cross)
-        out[:, self._active] += d.astype(np.float32)
-        return out
+        out = self._coefficients(A) @ self._matrix
+        out += self._rest_flat.astype(np.float32)
+        return out.reshape(len(A), -1, 3)
 
     def table(self):
         """A DataFrame describing the muscles: name, kind, side, range, lip side."""
