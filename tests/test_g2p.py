@@ -3,6 +3,7 @@
 import warnings
 
 import numpy as np
+import pandas as pd
 import pytest
 import soundfile as sf
 from hypothesis import given, settings
@@ -11,6 +12,7 @@ from hypothesis import strategies as st
 from visemeface.errors import InputError
 from visemeface.postures.phonemes import DECTALK
 from visemeface.speech.g2p import durations, emotion_keys, number_to_words, speech_span, text_to_segments, timing
+from visemeface.speech.g2p import words as g2p_words
 
 
 def phones(seg):
@@ -102,12 +104,15 @@ def test_emotion_tags_become_a_key_track():
     keys = emotion_keys(seg)
     assert list(keys.emotion) == ["anger", "neutral", "happiness", "fear"]
     assert list(keys.weight) == [0.8, 1.0, 0.5, 1.0]
-    words = seg.attrs["words"]
+    words = g2p_words(seg)
     assert keys.time.iloc[0] == 0.0
     assert keys.time.iloc[1] == pytest.approx(words.start[words.word == "fine"].iloc[0])
     assert keys.time.iloc[2] == pytest.approx(words.start[words.word == "thanks"].iloc[0])
     assert keys.time.iloc[3] == pytest.approx(words.end.iloc[-1])     # a final tag: at the end of speech
     assert emotion_keys(text_to_segments("plain")).empty
+    # Plain tuples in attrs: segments still concatenate and compare.
+    both = pd.concat([seg, seg], ignore_index=True)
+    assert len(both) == 2 * len(seg) and both.attrs["emotion_keys"] == seg.attrs["emotion_keys"]
 
 
 @pytest.mark.parametrize("text,match", [

@@ -12,6 +12,7 @@ from praatio import textgrid
 from visemeface.errors import InputError
 from visemeface.postures.phonemes import DECTALK
 from visemeface.resources import transcripts_path
+from visemeface.speech.g2p import emotion_keys
 from visemeface.speech.transcripts import FORMATS, detect_format, read_transcript
 
 SENTENCE = "_ b aa b m uw v z f ay v b ow t s _".split()
@@ -73,7 +74,7 @@ def test_text_example_with_emotion_tags():
     seg = read_transcript(transcripts_path("bob_moves_five_boats_angry.txt"))
     assert seg.attrs["format"] == "text"
     assert_valid(seg)
-    keys = seg.attrs["emotion_keys"]
+    keys = emotion_keys(seg)
     assert list(keys.emotion) == ["anger", "happiness"] and list(keys.weight) == [0.8, 0.6]
     assert keys.time.iloc[0] == 0.0 and keys.time.iloc[1] > 1.0
 

@@ -27,10 +27,11 @@ Emotion tags
 ``[anger 0.8] I told you [neutral] fine`` -- a tag ``[name weight]``,
 ``[name=weight]`` or ``[name]`` (weight 1) sets that emotion's weight from the
 next word on; ``[neutral]`` sets every emotion to 0. The tags are returned as an
-*emotion key track*: a DataFrame with columns ``time`` (s), ``emotion`` (str),
-``weight`` (float), sorted by time, in ``segments.attrs["emotion_keys"]``
-(``emotion == "neutral"`` means all emotions to 0). The timeline ramps between
-keys smoothly.
+*emotion key track*: ``segments.attrs["emotion_keys"]`` holds a tuple of
+``(time_s, emotion, weight)`` tuples in time order, and :func:`emotion_keys`
+returns it as a DataFrame with columns ``time`` (s), ``emotion`` (str),
+``weight`` (float) (``emotion == "neutral"`` means all emotions to 0). The
+timeline ramps between keys smoothly.
 
 Examples
 --------
@@ -55,7 +56,7 @@ from visemeface.errors import InputError
 from visemeface.postures.phonemes import DECTALK, SILENCE, is_vowel, to_dectalk
 from visemeface.resources import data_path
 
-__all__ = ["DEFAULT_RATE_WPM", "durations", "emotion_keys", "inherent_duration", "number_to_words",
+__all__ = ["DEFAULT_RATE_WPM", "durations", "emotion_keys", "words", "inherent_duration", "number_to_words",
            "speech_span", "text_to_segments", "timing", "word_to_arpabet"]
 
 
@@ -389,9 +390,9 @@ def text_to_segments(text: str, rate_wpm: float | None = None, audio=None, *, pa
     -------
     Segments
         DataFrame ``start``, ``end``, ``phoneme``, starting and ending with
-        silence. ``attrs["emotion_keys"]``: the emotion key track (columns
-        ``time``, ``emotion``, ``weight``); ``attrs["words"]``: DataFrame
-        ``start``, ``end``, ``word``.
+        silence. ``attrs["emotion_keys"]``: the emotion key track, a tuple of
+        ``(time, emotion, weight)`` (as a DataFrame: :func:`emotion_keys`);
+        ``attrs["words"]``: a tuple of ``(start, end, word)`` (:func:`words`).
 
     Raises
     ------
@@ -524,24 +525,30 @@ def text_to_segments(text: str, rate_wpm: float | None = None, audio=None, *, pa
         if w >= 0:
             w_start.setdefault(w, float(s))
             w_end[w] = float(e)
-    segments.attrs["words"] = pd.DataFrame({"start": [w_start[i] for i in range(len(words))],
-                                            "end": [w_end[i] for i in range(len(words))],
-                                            "word": words})
+    # attrs hold plain tuples (pandas compares attrs when concatenating; DataFrames there would fail).
+    segments.attrs["words"] = tuple((w_start[i], w_end[i], words[i]) for i in range(len(words)))
     key_times = []
     for k, name, weight in emotion_at:
         when = phone_start[k] if k < len(phone_start) else speech_t1
-        key_times.append((float(remap(when)) if k > 0 else 0.0, name, weight))
-    segments.attrs["emotion_keys"] = pd.DataFrame(
-        {"time": [k[0] for k in key_times], "emotion": [k[1] for k in key_times],
-         "weight": [k[2] for k in key_times]}, columns=["time", "emotion", "weight"]).astype(
-        {"time": float, "weight": float})
+        key_times.append((float(remap(when)) if k > 0 else 0.0, name, float(weight)))
+    segments.attrs["emotion_keys"] = tuple(key_times)
     return segments
 
 
 def emotion_keys(segments: pd.DataFrame) -> pd.DataFrame:
-    """The emotion key track stored with ``segments`` (empty when there is none)."""
-    keys = segments.attrs.get("emotion_keys")
-    if keys is None:
-        return pd.DataFrame({"time": pd.Series(dtype=float), "emotion": pd.Series(dtype=object),
-                             "weight": pd.Series(dtype=float)})
-    return keys
+    """The emotion key track stored with ``segments``: DataFrame ``time``, ``emotion``, ``weight``.
+
+    Empty when there is none.
+    """
+    keys = segments.attrs.get("emotion_keys") or ()
+    return pd.DataFrame({"time": pd.Series([float(k[0]) for k in keys], dtype=float),
+                         "emotion": pd.Series([str(k[1]) for k in keys], dtype=object),
+                         "weight": pd.Series([float(k[2]) for k in keys], dtype=float)})
+
+
+def words(segments: pd.DataFrame) -> pd.DataFrame:
+    """The word timing stored with ``segments``: DataFrame ``start``, ``end``, ``word``."""
+    rows = segments.attrs.get("words") or ()
+    return pd.DataFrame({"start": pd.Series([float(r[0]) for r in rows], dtype=float),
+                         "end": pd.Series([float(r[1]) for r in rows], dtype=float),
+                         "word": pd.Series([str(r[2]) for r in rows], dtype=object)})

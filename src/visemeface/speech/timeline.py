@@ -47,9 +47,9 @@ the lips close on every /p b m/ however fast the speech.
 Emotions
 --------
 ``emotions`` is a mapping ``{name: weight}`` (global, from t = 0), a key track
-(DataFrame ``time``, ``emotion``, ``weight``; see :mod:`visemeface.speech.g2p`;
-``neutral`` sets every emotion to 0), or None; a key track stored in
-``segments.attrs["emotion_keys"]`` is applied too. A weight changes by a cosine
+(DataFrame ``time``, ``emotion``, ``weight``, or a sequence of such triples; see
+:mod:`visemeface.speech.g2p`; ``neutral`` sets every emotion to 0), or None; a
+key track stored in ``segments.attrs["emotion_keys"]`` is applied too. A weight changes by a cosine
 ramp of ``emotion_ramp`` seconds centred on its key. Each frame is then
 (seed 002 §2.2.1)
 
@@ -254,6 +254,7 @@ def speech_track(segments: pd.DataFrame, visemes: pd.DataFrame, fps: float = 30.
 # ----------------------------------------------------------------------------- emotions
 
 def _keys_frame(keys) -> pd.DataFrame:
+    """An emotion key track as a DataFrame (from a DataFrame or ``(time, emotion, weight)`` tuples)."""
     if keys is None:
         return pd.DataFrame({"time": [], "emotion": [], "weight": []})
     if isinstance(keys, pd.DataFrame):
@@ -261,6 +262,11 @@ def _keys_frame(keys) -> pd.DataFrame:
         if missing:
             raise InputError(f"emotion key track lacks column(s) {', '.join(missing)}")
         return keys[["time", "emotion", "weight"]]
+    if isinstance(keys, (list, tuple)):
+        if not all(isinstance(k, (list, tuple)) and len(k) == 3 for k in keys):
+            raise InputError("emotion keys must be (time, emotion, weight) triples")
+        return pd.DataFrame({"time": [float(k[0]) for k in keys], "emotion": [str(k[1]) for k in keys],
+                             "weight": [k[2] for k in keys]})
     raise InputError(f"emotions must be a mapping name->weight or a key track, got {type(keys).__name__}")
 
 
