@@ -368,6 +368,7 @@ def plan_outputs(out: Outputs) -> None:
 class RenderSettings:
     size: int = 512
     view: str = "face"
+    msaa: int = 4
     fps: float = 30.0
     audio: Path | None = None
     show_progress: bool = True
@@ -408,7 +409,7 @@ def animate(track: pd.DataFrame, rig, out: Outputs, settings: RenderSettings,
     need_image = out.video is not None or out.frames is not None
     frames = None
     if out.frames is not None:
-        frames = FrameFolder(out.frames, render_key(rig, a, settings.size, settings.view),
+        frames = FrameFolder(out.frames, render_key(rig, a, settings.size, f"{settings.view}/msaa{settings.msaa}"),
                              resume=out.resume, force=out.force)
         frames.check()
 
@@ -419,7 +420,8 @@ def animate(track: pd.DataFrame, rig, out: Outputs, settings: RenderSettings,
             from visemeface.render.renderer import Renderer
 
             renderer = stack.enter_context(
-                Renderer(face, size=(settings.size, settings.size), view=settings.view))
+                Renderer(face, size=(settings.size, settings.size), view=settings.view,
+                         samples=settings.msaa))
         video = obj = pc2 = None
         if out.video is not None:
             video = stack.enter_context(export.VideoWriter(

@@ -1,0 +1,130 @@
+"""End-to-end speed and peak memory of ``visemeface speak`` (transcript -> MP4).
+
+Prints one JSON line per run and a summary line::
+
+    PYTHONPATH=src python benchmarks/speak.py [--size 512] [--fps 30] [--durations 10 60] [--msaa 4]
+
+Each run is a fresh Python process (``--child``) that runs the CLI in-process
+and reports its own wall time and peak resident memory (``ru_maxrss`` of the
+process itself; ffmpeg's, a child process with its own bounded buffers, is
+reported separately). The transcript is "one five zero zero six" repeated to
+the wanted length. Targets (issue 5): >= 100 frames/s end to end at 512^2 and
+30 fps; the 60 s run's peak memory within 10 % of the 10 s run's (frames are
+streamed, so memory must not grow with the utterance).
+
+``marginal_fps`` = (F_long - F_short) / (T_long - T_short) removes the fixed
+start-up cost (imports, building the rig, the GL context) from the rate;
+``marginal_cpu_ms_per_frame`` is the same for CPU time (all threads, ffmpeg
+included), which is less disturbed than wall time when the machine is shared
+(the 1-minute load average at the end of each run is printed too).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+# "one five zero zero six" in DECtalk symbols with durations (s); "_" = pause.
+WORDS = [
+    [("w", 0.08), ("ah", 0.14), ("n", 0.09)],
+    [("f", 0.10), ("ay", 0.18), ("v", 0.08)],
+    [("z", 0.09), ("ir", 0.12), ("ow", 0.15)],
+    [("z", 0.09), ("ir", 0.12), ("ow", 0.15)],
+    [("s", 0.11), ("ih", 0.09), ("k", 0.07), ("s", 0.12)],
+]
+
+
+def write_transcript(path: Path, seconds: float) -> float:
+    """Timed ``start end phone`` lines repeating the digits until ``seconds``; returns the end."""
+    t, lines = 0.0, ["# benchmark: 'one five zero zero six' repeated"]
+    while True:
+        for word in WORDS:
+            for phone, dur in word + [("_", 0.06)]:
+                if t + dur > seconds:
+                    path.write_text("\n".join(lines) + "\n")
+                    return t
+                lines.append(f"{t:.3f} {t + dur:.3f} {phone}")
+                t += dur
+
+
+def child(argv: list[str]) -> None:
+    from visemeface.cli import main
+
+    t0 = time.perf_counter()
+    code = main(argv)
+    wall = time.perf_counter() - t0
+    me = resource.getrusage(resource.RUSAGE_SELF)
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
+    print(json.dumps({"code": code, "wall_s": wall, "peak_rss_mb": me.ru_maxrss / 1024,
+                      "ffmpeg_peak_rss_mb": kids.ru_maxrss / 1024,
+                      "cpu_s": me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime,
+                      "load1": os.getloadavg()[0]}))
+
+
+def run_one(seconds: float, size: int, fps: float, workdir: Path, msaa: int = 4) -> dict:
+    transcript = workdir / f"bench_{seconds:g}s.txt"
+    end = write_transcript(transcript, seconds)
+    out = workdir / f"bench_{seconds:g}s.mp4"
+    argv = ["speak", str(transcript), "-o", str(out), "--size", str(size), "--fps", str(fps),
+            "--msaa", str(msaa), "--force", "-q"]
+    env = dict(os.environ)
+    src = str(Path(__file__).resolve().parents[1] / "src")
+    env["PYTHONPATH"] = src + os.pathsep + env.get("PYTHONPATH", "")
+    t0 = time.perf_counter()
+    proc = subprocess.run([sys.executable, __file__, "--child", json.dumps(argv)],
+                          capture_output=True, text=True, env=env)
+    total = time.perf_counter() - t0
+    if proc.returncode != 0:
+        raise SystemExit(f"speak failed:\n{proc.stderr}")
+    res = json.loads(proc.stdout.strip().splitlines()[-1])
+    if res["code"] != 0:
+        raise SystemExit(f"speak exited {res['code']}:\n{proc.stderr}")
+    from visemeface.render.export import read_video_info
+
+    frames = read_video_info(out)["n_frames"]
+    return {"bench": "speak", "utterance_s": round(end, 3), "size": size, "fps": fps, "msaa": msaa,
+            "frames": frames, "wall_s": round(res["wall_s"], 3),
+            "process_s": round(total, 3),
+            "frames_per_s": round(frames / res["wall_s"], 1),
+            "peak_rss_mb": round(res["peak_rss_mb"], 1),
+            "ffmpeg_peak_rss_mb": round(res["ffmpeg_peak_rss_mb"], 1),
+            "cpu_s": round(res["cpu_s"], 2), "cpus": os.cpu_count(),
+            "load_avg_1min_at_end": round(res["load1"], 2)}
+
+
+def main() -> None:
+    if len(sys.argv) == 3 and sys.argv[1] == "--child":
+        child(json.loads(sys.argv[2]))
+        return
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--size", type=int, default=512)
+    ap.add_argument("--fps", type=float, default=30.0)
+    ap.add_argument("--durations", type=float, nargs="+", default=[10.0, 60.0])
+    ap.add_argument("--msaa", type=int, default=4, help="antialiasing samples (speak's --msaa)")
+    args = ap.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        rows = [run_one(s, args.size, args.fps, Path(tmp), args.msaa) for s in args.durations]
+    for r in rows:
+        print(json.dumps(r), flush=True)
+    short, long_ = rows[0], rows[-1]
+    if len(rows) > 1 and long_["frames"] > short["frames"]:
+        marginal = (long_["frames"] - short["frames"]) / max(long_["wall_s"] - short["wall_s"], 1e-9)
+        ratio = long_["peak_rss_mb"] / short["peak_rss_mb"]
+        cpu_per_frame = (long_["cpu_s"] - short["cpu_s"]) / (long_["frames"] - short["frames"])
+        print(json.dumps({"bench": "speak_summary", "marginal_fps": round(marginal, 1),
+                          "marginal_cpu_ms_per_frame": round(1e3 * cpu_per_frame, 2),
+                          "end_to_end_fps_long": long_["frames_per_s"],
+                          "fps_target": 100, "fps_ok": long_["frames_per_s"] >= 100,
+                          "peak_rss_ratio_long_short": round(ratio, 3),
+                          "memory_ok": ratio <= 1.10}), flush=True)
+
+
+if __name__ == "__main__":
+    main()
