@@ -83,8 +83,12 @@ def test_lip_trimming(rig):
             assert mag[upper].max() > 0.0 or mag.max() > 0.0
         elif m.lip == "lower":
             assert np.all(mag[upper_c] == 0.0), m.name
-    # The jaw is a lower-lip function: the upper lip's centre stays put.
-    assert np.all(rig.jaw_displacement(1.0)[upper_c] == 0.0)
+    # The jaw is a lower-lip function: the upper lip's central part stays put; near the
+    # corners (where the jaw's blend lets both lips stretch) it moves far less than the lower lip.
+    d = np.linalg.norm(rig.jaw_displacement(1.0), axis=1)
+    u = mouth_frame(rig.face).to_local(rig.rest[upper])[:, 0] / (rig.frame.width / 2)
+    assert np.all(d[upper[np.abs(u) < 0.3]] < 0.005 * d[lower].max())
+    assert d[upper].max() < 0.35 * d[lower].max()
 
 
 def test_trim_weights_are_smooth_across_skin_edges(rig):

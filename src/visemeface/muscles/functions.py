@@ -228,7 +228,7 @@ def seam_height(u: np.ndarray, seam_u: np.ndarray, seam_v: np.ndarray, smooth: f
 
 def lip_trim_weights(u: np.ndarray, v: np.ndarray, surface_v: np.ndarray, side: np.ndarray,
                      inner_width: float, outer_width: float, corner_start: float = 0.75,
-                     corner_end: float = 1.15) -> np.ndarray:
+                     corner_end: float = 1.15, tag: float = 2.0) -> np.ndarray:
     r"""Weight (N,) in [0, 1] of *upper-lip* muscles; lower-lip muscles use ``1 - w``.
 
     Positions are in the mouth frame: ``u`` lateral in half mouth widths
@@ -240,11 +240,12 @@ def lip_trim_weights(u: np.ndarray, v: np.ndarray, surface_v: np.ndarray, side: 
     .. math::
         c &= \mathrm{smoothstep}(u_0, u_1, |u|) \quad\text{(0 between the lips, 1 past the corners)}\\
         w_b &= w_i + (w_o - w_i)\,c \\
-        t &= \frac{v - h(u)}{w_b} + 2\sigma\,(1 - c) \\
+        t &= \frac{v - h(u)}{w_b} + \tau\sigma\,(1 - c) \\
         w &= \mathrm{smoothstep}(-1, 1, t)
 
     Between the lips the cut is sharp (width :math:`w_i`) and the tag
-    :math:`\sigma` decides the seam vertices, so the lips part. Toward and past
+    :math:`\sigma` (strength :math:`\tau`, ``tag``; 2 makes coincident seam
+    copies exactly 0 or 1) decides the seam vertices, so the lips part. Toward and past
     the corners, where skin is continuous, the blend widens to :math:`w_o` and
     the tag fades, so upper and lower muscles share the corner smoothly (no
     tear, no crease).
@@ -252,7 +253,7 @@ def lip_trim_weights(u: np.ndarray, v: np.ndarray, surface_v: np.ndarray, side: 
     u = np.asarray(u, dtype=float)
     c = smoothstep(corner_start, corner_end, np.abs(u))
     width = inner_width + (outer_width - inner_width) * c
-    t = (np.asarray(v, dtype=float) - surface_v) / width + 2.0 * np.asarray(side, dtype=float) * (1.0 - c)
+    t = (np.asarray(v, dtype=float) - surface_v) / width + tag * np.asarray(side, dtype=float) * (1.0 - c)
     return smoothstep(-1.0, 1.0, t)
 
 

@@ -332,7 +332,11 @@ class MuscleRig:
                 b[face.regions[region]] = 0.0
             bases[i] = b
         self.bases = bases
-        jw = mf.jaw_centre_weight(u, jaw["reach"]) * lower
+        # The jaw's own trim: its blend starts nearer the centre and its lip tag is weaker, so
+        # the opening narrows smoothly into the corners (a lens, not a box with vertical ends).
+        jaw_trim = dict(trim, corner_start=jaw["corner_start"], corner_end=jaw["corner_end"])
+        jaw_lower = 1.0 - self._trim_weights(face, frame, local, u, jaw_trim, tag=jaw["tag"])
+        jw = mf.jaw_centre_weight(u, jaw["reach"]) * jaw_lower
         for region in jaw["exclude"]:
             jw[face.regions[region]] = 0.0
         self.jaw_weight = jw
@@ -391,7 +395,7 @@ class MuscleRig:
 
     # ---------------------------------------------------------------- build
     @staticmethod
-    def _trim_weights(face, frame, local, u, trim) -> np.ndarray:
+    def _trim_weights(face, frame, local, u, trim, tag: float = 2.0) -> np.ndarray:
         seam = np.concatenate([face.region("lip_seam_upper"), face.region("lip_seam_lower")])
         corners = [face.landmarks["mouth_corner_left"], face.landmarks["mouth_corner_right"]]
         seam = np.unique(np.concatenate([seam, corners]))
@@ -402,7 +406,8 @@ class MuscleRig:
         if "lower_lip" in face.regions:
             side[face.regions["lower_lip"]] = -1.0
         return mf.lip_trim_weights(u, local[:, 1], surface, side, trim["inner_width"] * frame.width,
-                                   trim["outer_width"] * frame.width, trim["corner_start"], trim["corner_end"])
+                                   trim["outer_width"] * frame.width, trim["corner_start"], trim["corner_end"],
+                                   tag)
 
     @classmethod
     def from_file(cls, face, path: str | Path | None = None) -> MuscleRig:
@@ -438,7 +443,12 @@ class MuscleRig:
             "reach": reader.get(j, "jaw", "reach", float),
             "range": reader.get(j, "jaw", "range", "range"),
             "exclude": reader.get(j, "jaw", "exclude", "regions", ()),
+            "corner_start": reader.get(j, "jaw", "corner_start", float, trim["corner_start"]),
+            "corner_end": reader.get(j, "jaw", "corner_end", float, trim["corner_end"]),
+            "tag": reader.get(j, "jaw", "tag", float, 2.0),
         }
+        if not 0 <= jaw["corner_start"] < jaw["corner_end"]:
+            raise reader.error("jaw", "corner_end", "need 0 <= corner_start < corner_end")
         for region in jaw["exclude"]:
             if region not in face.regions:
                 raise reader.error("jaw", "exclude", f"unknown region {region!r}" + close_matches(region, face.regions))
