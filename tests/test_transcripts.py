@@ -378,6 +378,8 @@ def test_detect_format_by_content():
     assert detect_format('{"tiers": {}}') == "mfa-json"
     assert detect_format("Begin,End,Label,Type,Speaker\n") == "mfa-csv"
     assert detect_format('File type = "ooTextFile"\n') == "textgrid"
+    assert detect_format("separator ;\nnfields 1\n#\n 0.1 125 pau\n") == "lab"
+    assert detect_format("#\n# my phones\n0 0.1 aa\n") == "timed"        # a bare comment is not xwaves
 
 
 def test_file_errors(tmp_path):

@@ -183,8 +183,12 @@ def detect_format(text: str, path=None) -> str:
     if stripped.startswith("[") and not _TEXT_OUTSIDE_BRACKETS.search(_BRACKETS.sub(" ", stripped)):
         return "dectalk"
     lines = [ln for ln in (_strip_comment(s) for s in stripped.splitlines()) if ln]
-    if any(ln.strip() == "#" for ln in stripped.splitlines()[:40]):
-        return "lab"
+    top = stripped.splitlines()[:40]
+    if "#" in [ln.strip() for ln in top]:
+        header = top[:[ln.strip() for ln in top].index("#")]
+        if suffix == ".lab" or any(ln.split()[:1] in (["separator"], ["nfields"], ["signal"], ["type"])
+                                   for ln in header):
+            return "lab"                       # xwaves/ESPS header ended by "#"
     if suffix == ".phn":
         return "phn"
     if suffix == ".lab":
