@@ -61,6 +61,7 @@ _SKIN = np.array([0.87, 0.67, 0.56])
 _LIP = np.array([0.78, 0.40, 0.41])
 _BROW = np.array([0.36, 0.25, 0.19])
 _NOSTRIL = np.array([0.30, 0.17, 0.15])
+_HAIR = np.array([0.20, 0.135, 0.095])
 _SCLERA = np.array([0.93, 0.91, 0.87])
 _IRIS = np.array([0.30, 0.20, 0.12])
 _PUPIL = np.array([0.03, 0.03, 0.03])
@@ -164,8 +165,7 @@ def _relief(X, Y, Yc):
     h -= 0.0030 * _gauss((ax / 0.022) ** 2 + ((Y + 0.019) / 0.006) ** 2)
     h += 0.0085 * _gauss((ax / 0.018) ** 2 + ((Y + 0.034) / 0.011) ** 2)
     # nose: dorsum from nasion to tip, tip lobule, columella underside
-    t = np.clip((Y - _Y_SUBNASALE) / (0.068 - _Y_SUBNASALE), 0, 1)   # 0 subnasale .. 1 nasion
-    t = np.clip((Y - _Y_SUBNASALE) / (0.068 - _Y_SUBNASALE), 0, 1.4)
+    t = np.clip((Y - _Y_SUBNASALE) / (0.068 - _Y_SUBNASALE), 0, 1.4)   # 0 subnasale .. 1 nasion
     prof = PchipInterpolator([0, 0.07, 0.2, 0.32, 0.6, 1.0, 1.2, 1.4],
                              [0.0, 0.011, 0.0215, 0.0230, 0.0170, 0.0085, 0.0030, 0.0])(t)
     width = PchipInterpolator([0, 0.2, 0.32, 0.6, 1.0, 1.4],
@@ -546,6 +546,12 @@ def default_face(resolution: int | None = None, rest_gap: float = 0.0) -> FaceMe
         - 0.002 * (ax / 0.05)
     brow_w = (_smoothstep(1.15 - np.abs(Yv - brow_line) / (0.0062 - 0.0028 * np.clip((ax - 0.012) / 0.045, 0, 1)))
               * _smoothstep((ax - 0.010) / 0.004) * _smoothstep((0.060 - ax) / 0.005))
+    # a soft shadow in the upper-lid crease
+    crease = _gauss(((Yv - _EYE_Y - 0.0088 + 0.004 * ((ax - _EYE_X) / _EYE_HALF_W) ** 2) / 0.0018) ** 2) \
+        * _gauss(((ax - _EYE_X) / (1.05 * _EYE_HALF_W)) ** 4)
+    # hair above an arched hairline, lower at the temples
+    hairline = 0.132 - 0.028 * _smoothstep((ax - 0.030) / 0.045)
+    hair_w = _smoothstep((Yv - hairline) / 0.013)
     nostril_w = _gauss(((ax - 0.0062) / 0.0030) ** 2 + ((Yv - 0.0208) / 0.0022) ** 2)
     g = colours[:n_grid]
     g = g + rosy[:, None] * (np.array([0.84, 0.55, 0.50]) - g)
@@ -557,6 +563,8 @@ def default_face(resolution: int | None = None, rest_gap: float = 0.0) -> FaceMe
     lash = upper_margin & (np.abs(ax - _EYE_X) <= _EYE_HALF_W + 1e-12)
     g[lash] = g[lash] + 0.85 * (np.array([0.12, 0.08, 0.07]) - g[lash])
     g = g + np.clip(nostril_w, 0, 1)[:, None] * (_NOSTRIL - g)
+    g = g * (1 - 0.16 * crease)[:, None]
+    g = g + hair_w[:, None] * (_HAIR - g)
     colours[:n_grid] = g
     # the inner lip line: a darker vermilion along the seam (shows as the closed-lip line)
     colours[seam_up[1:-1]] *= 0.62
