@@ -302,10 +302,10 @@ def _read_surface(path: Path):
         loaded = trimesh.load(path, process=False, maintain_order=True,
                               skip_materials=True)
         if isinstance(loaded, trimesh.Scene):
-            geoms = [g for g in loaded.geometry.values() if isinstance(g, trimesh.Trimesh)]
-            if not geoms:
+            if not any(isinstance(g, trimesh.Trimesh) for g in loaded.geometry.values()):
                 raise ValueError("no triangle mesh in the scene")
-            loaded = geoms[0] if len(geoms) == 1 else trimesh.util.concatenate(geoms)
+            # the scene's node transforms applied, all meshes in one (vertex order kept)
+            loaded = loaded.to_geometry() if hasattr(loaded, "to_geometry") else loaded.dump(concatenate=True)
     except InputError:
         raise
     except Exception as exc:  # trimesh raises many types for broken files

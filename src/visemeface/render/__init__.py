@@ -1,1 +1,6 @@
-"""visemeface.render"""
+"""visemeface.render: headless OpenGL rendering (:mod:`~visemeface.render.renderer`) and file
+export of animations (:mod:`~visemeface.render.export`).
+
+The renderer is imported on demand (``from visemeface.render.renderer import Renderer``) so that
+importing the package does not load OpenGL.
+"""
