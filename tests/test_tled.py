@@ -225,18 +225,21 @@ def test_numba_and_numpy_agree_after_100_steps_on_a_random_mesh():
         return scale
 
     results = {}
-    for backend in ("numba", "numpy"):
+    for backend, parallel in (("numba", True), ("numba", False), ("numpy", None)):
         jaw = prescribed_rotation(m, m.node_sets["zmin"], [0, 0, -0.01], [1, 0, 0], lambda t: 5.0 * t)
         solver = TLEDSolver(m, [SOFT_TISSUE, SALIVA], dt=5e-7, damping=80.0, fixed=m.node_sets["xmin"],
                             prescribed=[jaw], forces=[(m.node_sets["xmax"], lambda t: [0.0, 0.02 * t, 0.0])],
-                            element_hook=hook, backend=backend)
-        results[backend] = list(solver.run(100, output_every=50, initial_displacement=u0, initial_velocity=v0))
-    a, b = results["numba"][-1], results["numpy"][-1]
-    moved = np.abs(a.displacement - u0).max()
-    assert moved > 1e-6
-    assert np.abs(a.displacement - b.displacement).max() < 1e-10 * np.abs(a.displacement).max()
-    assert a.strain_energy == pytest.approx(b.strain_energy, rel=1e-10)
-    assert a.kinetic_energy == pytest.approx(b.kinetic_energy, rel=1e-10)
+                            element_hook=hook, backend=backend, parallel=parallel)
+        results[backend, parallel] = list(solver.run(100, output_every=50, initial_displacement=u0,
+                                                     initial_velocity=v0))
+    b = results["numpy", None][-1]
+    for parallel in (True, False):
+        a = results["numba", parallel][-1]
+        moved = np.abs(a.displacement - u0).max()
+        assert moved > 1e-6
+        assert np.abs(a.displacement - b.displacement).max() < 1e-10 * np.abs(a.displacement).max()
+        assert a.strain_energy == pytest.approx(b.strain_energy, rel=1e-10)
+        assert a.kinetic_energy == pytest.approx(b.kinetic_energy, rel=1e-10)
     assert 0 < seen["J"] < 2
 
 
@@ -318,3 +321,15 @@ def test_uniaxial_curve_limits():
     F = np.diag([float(lt[1]), float(lt[1]), 1.5])
     S = second_piola_kirchhoff(F, stiff.mu, stiff.K)
     assert abs(S[0, 0]) < 1e-8 * abs(S[2, 2]) * 1e3
+
+
+def test_numba_kernel_matches_numpy_at_large_compression_and_stretch():
+    """J from 0.2 to 4: the fast J^(-1/3) of the numba kernel and its fallback."""
+    m = _distorted_box(shape=(2, 2, 2), size=(0.01, 0.01, 0.01), amount=0.2, seed=6)
+    fast, ref = (TLEDSolver(m, SOFT_TISSUE, dt=1e-5, backend=b) for b in ("numba", "numpy"))
+    rng = np.random.default_rng(7)
+    for J in (0.2, 0.49, 0.51, 0.9, 1.0, 1.2, 1.99, 2.01, 4.0):
+        F = _random_rotation(rng) @ np.diag([J ** (1 / 3)] * 3) @ (np.eye(3) + 0.1 * rng.normal(size=(3, 3)))
+        u = m.nodes @ F.T - m.nodes + rng.normal(0, 1e-5, m.nodes.shape)
+        a, b = fast.internal_forces(u), ref.internal_forces(u)
+        assert np.abs(a - b).max() < 1e-12 * np.abs(b).max()

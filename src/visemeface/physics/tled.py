@@ -99,6 +99,9 @@ HOURGLASS_BASE = np.array(
     [[1, 1, 1, -1], [-1, 1, -1, 1], [1, -1, -1, -1], [-1, -1, 1, 1],
      [1, -1, -1, 1], [-1, -1, 1, -1], [1, 1, 1, 1], [-1, 1, -1, -1]], dtype=np.float64)
 
+#: Meshes with fewer elements run the numba kernels on one thread by default.
+PARALLEL_MIN_ELEMENTS = 1000
+
 #: Seed 000 Table 1's hourglass coefficient κ.
 DEFAULT_HOURGLASS_KAPPA = 0.075
 
@@ -209,146 +212,207 @@ def prescribed_rotation(mesh: HexMesh, nodes, centre, axis, angle: Callable[[flo
 # numba kernels
 # ---------------------------------------------------------------------------
 
-@njit(parallel=True, cache=True, boundscheck=False)
-def _element_forces_nb(u, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, store_f, energy,
-                       want_energy):  # pragma: no cover - compiled
-    ne = conn.shape[0]
-    for e in prange(ne):
-        x00 = 1.0
-        x01 = 0.0
-        x02 = 0.0
-        x10 = 0.0
-        x11 = 1.0
-        x12 = 0.0
-        x20 = 0.0
-        x21 = 0.0
-        x22 = 1.0
-        q00 = 0.0
-        q01 = 0.0
-        q02 = 0.0
-        q10 = 0.0
-        q11 = 0.0
-        q12 = 0.0
-        q20 = 0.0
-        q21 = 0.0
-        q22 = 0.0
-        q30 = 0.0
-        q31 = 0.0
-        q32 = 0.0
-        for a in range(8):
-            n = conn[e, a]
-            u0 = u[n, 0]
-            u1 = u[n, 1]
-            u2 = u[n, 2]
-            d0 = dhdx[e, a, 0]
-            d1 = dhdx[e, a, 1]
-            d2 = dhdx[e, a, 2]
-            x00 += u0 * d0
-            x01 += u0 * d1
-            x02 += u0 * d2
-            x10 += u1 * d0
-            x11 += u1 * d1
-            x12 += u1 * d2
-            x20 += u2 * d0
-            x21 += u2 * d1
-            x22 += u2 * d2
-            g = gamma[e, a, 0]
-            q00 += g * u0
-            q01 += g * u1
-            q02 += g * u2
-            g = gamma[e, a, 1]
-            q10 += g * u0
-            q11 += g * u1
-            q12 += g * u2
-            g = gamma[e, a, 2]
-            q20 += g * u0
-            q21 += g * u1
-            q22 += g * u2
-            g = gamma[e, a, 3]
-            q30 += g * u0
-            q31 += g * u1
-            q32 += g * u2
-        c00 = x00 * x00 + x10 * x10 + x20 * x20
-        c11 = x01 * x01 + x11 * x11 + x21 * x21
-        c22 = x02 * x02 + x12 * x12 + x22 * x22
-        c01 = x00 * x01 + x10 * x11 + x20 * x21
-        c02 = x00 * x02 + x10 * x12 + x20 * x22
-        c12 = x01 * x02 + x11 * x12 + x21 * x22
-        J = x00 * (x11 * x22 - x12 * x21) - x01 * (x10 * x22 - x12 * x20) + x02 * (x10 * x21 - x11 * x20)
-        jac[e] = J
-        inv = 1.0 / (J * J)
-        i00 = (c11 * c22 - c12 * c12) * inv
-        i11 = (c00 * c22 - c02 * c02) * inv
-        i22 = (c00 * c11 - c01 * c01) * inv
-        i01 = (c02 * c12 - c01 * c22) * inv
-        i02 = (c01 * c12 - c02 * c11) * inv
-        i12 = (c01 * c02 - c00 * c12) * inv
-        I1 = c00 + c11 + c22
-        Jm23 = 1.0 / np.cbrt(J * J)
-        m = mu[e] * Jm23
-        t = K[e] * J * (J - 1.0) - m * I1 / 3.0
-        s00 = m + t * i00
-        s11 = m + t * i11
-        s22 = m + t * i22
-        s01 = t * i01
-        s02 = t * i02
-        s12 = t * i12
-        V = vol[e]
-        p00 = V * (x00 * s00 + x01 * s01 + x02 * s02)
-        p01 = V * (x00 * s01 + x01 * s11 + x02 * s12)
-        p02 = V * (x00 * s02 + x01 * s12 + x02 * s22)
-        p10 = V * (x10 * s00 + x11 * s01 + x12 * s02)
-        p11 = V * (x10 * s01 + x11 * s11 + x12 * s12)
-        p12 = V * (x10 * s02 + x11 * s12 + x12 * s22)
-        p20 = V * (x20 * s00 + x21 * s01 + x22 * s02)
-        p21 = V * (x20 * s01 + x21 * s11 + x22 * s12)
-        p22 = V * (x20 * s02 + x21 * s12 + x22 * s22)
-        k = hgk[e]
-        for a in range(8):
-            d0 = dhdx[e, a, 0]
-            d1 = dhdx[e, a, 1]
-            d2 = dhdx[e, a, 2]
-            g0 = gamma[e, a, 0]
-            g1 = gamma[e, a, 1]
-            g2 = gamma[e, a, 2]
-            g3 = gamma[e, a, 3]
-            fe[e, a, 0] = p00 * d0 + p01 * d1 + p02 * d2 + k * (g0 * q00 + g1 * q10 + g2 * q20 + g3 * q30)
-            fe[e, a, 1] = p10 * d0 + p11 * d1 + p12 * d2 + k * (g0 * q01 + g1 * q11 + g2 * q21 + g3 * q31)
-            fe[e, a, 2] = p20 * d0 + p21 * d1 + p22 * d2 + k * (g0 * q02 + g1 * q12 + g2 * q22 + g3 * q32)
-        if store_f:
-            fdef[e, 0, 0] = x00
-            fdef[e, 0, 1] = x01
-            fdef[e, 0, 2] = x02
-            fdef[e, 1, 0] = x10
-            fdef[e, 1, 1] = x11
-            fdef[e, 1, 2] = x12
-            fdef[e, 2, 0] = x20
-            fdef[e, 2, 1] = x21
-            fdef[e, 2, 2] = x22
-        if want_energy:
-            hg = (q00 * q00 + q01 * q01 + q02 * q02 + q10 * q10 + q11 * q11 + q12 * q12
-                  + q20 * q20 + q21 * q21 + q22 * q22 + q30 * q30 + q31 * q31 + q32 * q32)
-            energy[e] = V * (0.5 * mu[e] * (Jm23 * I1 - 3.0) + 0.5 * K[e] * (J - 1.0) * (J - 1.0)) + 0.5 * k * hg
+# Safe fast-math: contraction to FMA, reassociation, reciprocals; NaN and inf
+# semantics kept (no "nnan"/"ninf") so a blow-up still shows in J.
+_FASTMATH = {"contract", "reassoc", "arcp", "nsz", "afn"}
+_KERNEL = dict(parallel=True, cache=True, boundscheck=False, error_model="numpy", fastmath=_FASTMATH)
+_SERIAL = dict(_KERNEL, parallel=False)
+
+# Cubic fit of J^(-1/3) on [0.5, 2] (relative error < 4e-3), refined below.
+_IC0, _IC1, _IC2, _IC3 = 1.7343073149751, -1.2416945615627, 0.62614907499671, -0.12057017491707
 
 
-@njit(parallel=True, cache=True, boundscheck=False)
+@njit(inline="always", cache=True, error_model="numpy")
+def _inv_cbrt(J):  # pragma: no cover - compiled
+    """J^(-1/3) to round-off, about 3x faster than libm's cbrt near J = 1.
+
+    For 0.5 < J < 2 a cubic start y₀ is corrected with the exact identity
+    J^(-1/3) = y (1 − r)^(-1/3), r = 1 − J y³, by the binomial series: to r⁴
+    (|r| < 1.2e-2 leaves < 1e-10), then to r² (leaves < 1e-19). Elsewhere
+    (rare, large strain) it falls back to 1 / cbrt(J).
+    """
+    if J > 0.5 and J < 2.0:
+        y = _IC0 + J * (_IC1 + J * (_IC2 + J * _IC3))
+        r = 1.0 - J * y * y * y
+        y = y * (1.0 + r * (1.0 / 3.0 + r * (2.0 / 9.0 + r * (14.0 / 81.0 + r * (35.0 / 243.0)))))
+        r = 1.0 - J * y * y * y
+        return y * (1.0 + r * (1.0 / 3.0 + r * (2.0 / 9.0)))
+    return 1.0 / np.cbrt(J)
+
+
+@njit(inline="always", error_model="numpy", fastmath=_FASTMATH)
+def _element_force(e, u, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, store_f, energy, want_energy):  # pragma: no cover - compiled
+    """Forces of element e into fe[e] (and J, X, energy): the body of the element loop.
+
+    Straight-line scalar code: no array is allocated, so the parallel loop
+    around it runs at full speed (allocation in a prange body costs 50–100×).
+    """
+    x00 = 1.0
+    x01 = 0.0
+    x02 = 0.0
+    x10 = 0.0
+    x11 = 1.0
+    x12 = 0.0
+    x20 = 0.0
+    x21 = 0.0
+    x22 = 1.0
+    q00 = 0.0
+    q01 = 0.0
+    q02 = 0.0
+    q10 = 0.0
+    q11 = 0.0
+    q12 = 0.0
+    q20 = 0.0
+    q21 = 0.0
+    q22 = 0.0
+    q30 = 0.0
+    q31 = 0.0
+    q32 = 0.0
+    for a in range(8):
+        n = conn[e, a]
+        u0 = u[n, 0]
+        u1 = u[n, 1]
+        u2 = u[n, 2]
+        d0 = dhdx[e, a, 0]
+        d1 = dhdx[e, a, 1]
+        d2 = dhdx[e, a, 2]
+        x00 += u0 * d0
+        x01 += u0 * d1
+        x02 += u0 * d2
+        x10 += u1 * d0
+        x11 += u1 * d1
+        x12 += u1 * d2
+        x20 += u2 * d0
+        x21 += u2 * d1
+        x22 += u2 * d2
+        g = gamma[e, a, 0]
+        q00 += g * u0
+        q01 += g * u1
+        q02 += g * u2
+        g = gamma[e, a, 1]
+        q10 += g * u0
+        q11 += g * u1
+        q12 += g * u2
+        g = gamma[e, a, 2]
+        q20 += g * u0
+        q21 += g * u1
+        q22 += g * u2
+        g = gamma[e, a, 3]
+        q30 += g * u0
+        q31 += g * u1
+        q32 += g * u2
+    c00 = x00 * x00 + x10 * x10 + x20 * x20
+    c11 = x01 * x01 + x11 * x11 + x21 * x21
+    c22 = x02 * x02 + x12 * x12 + x22 * x22
+    c01 = x00 * x01 + x10 * x11 + x20 * x21
+    c02 = x00 * x02 + x10 * x12 + x20 * x22
+    c12 = x01 * x02 + x11 * x12 + x21 * x22
+    J = x00 * (x11 * x22 - x12 * x21) - x01 * (x10 * x22 - x12 * x20) + x02 * (x10 * x21 - x11 * x20)
+    jac[e] = J
+    inv = 1.0 / (J * J)
+    i00 = (c11 * c22 - c12 * c12) * inv
+    i11 = (c00 * c22 - c02 * c02) * inv
+    i22 = (c00 * c11 - c01 * c01) * inv
+    i01 = (c02 * c12 - c01 * c22) * inv
+    i02 = (c01 * c12 - c02 * c11) * inv
+    i12 = (c01 * c02 - c00 * c12) * inv
+    I1 = c00 + c11 + c22
+    y = _inv_cbrt(J)
+    Jm23 = y * y
+    m = mu[e] * Jm23
+    t = K[e] * J * (J - 1.0) - m * I1 / 3.0
+    s00 = m + t * i00
+    s11 = m + t * i11
+    s22 = m + t * i22
+    s01 = t * i01
+    s02 = t * i02
+    s12 = t * i12
+    V = vol[e]
+    p00 = V * (x00 * s00 + x01 * s01 + x02 * s02)
+    p01 = V * (x00 * s01 + x01 * s11 + x02 * s12)
+    p02 = V * (x00 * s02 + x01 * s12 + x02 * s22)
+    p10 = V * (x10 * s00 + x11 * s01 + x12 * s02)
+    p11 = V * (x10 * s01 + x11 * s11 + x12 * s12)
+    p12 = V * (x10 * s02 + x11 * s12 + x12 * s22)
+    p20 = V * (x20 * s00 + x21 * s01 + x22 * s02)
+    p21 = V * (x20 * s01 + x21 * s11 + x22 * s12)
+    p22 = V * (x20 * s02 + x21 * s12 + x22 * s22)
+    k = hgk[e]
+    for a in range(8):
+        d0 = dhdx[e, a, 0]
+        d1 = dhdx[e, a, 1]
+        d2 = dhdx[e, a, 2]
+        g0 = gamma[e, a, 0]
+        g1 = gamma[e, a, 1]
+        g2 = gamma[e, a, 2]
+        g3 = gamma[e, a, 3]
+        fe[e, a, 0] = p00 * d0 + p01 * d1 + p02 * d2 + k * (g0 * q00 + g1 * q10 + g2 * q20 + g3 * q30)
+        fe[e, a, 1] = p10 * d0 + p11 * d1 + p12 * d2 + k * (g0 * q01 + g1 * q11 + g2 * q21 + g3 * q31)
+        fe[e, a, 2] = p20 * d0 + p21 * d1 + p22 * d2 + k * (g0 * q02 + g1 * q12 + g2 * q22 + g3 * q32)
+    if store_f:
+        fdef[e, 0, 0] = x00
+        fdef[e, 0, 1] = x01
+        fdef[e, 0, 2] = x02
+        fdef[e, 1, 0] = x10
+        fdef[e, 1, 1] = x11
+        fdef[e, 1, 2] = x12
+        fdef[e, 2, 0] = x20
+        fdef[e, 2, 1] = x21
+        fdef[e, 2, 2] = x22
+    if want_energy:
+        hg = (q00 * q00 + q01 * q01 + q02 * q02 + q10 * q10 + q11 * q11 + q12 * q12
+              + q20 * q20 + q21 * q21 + q22 * q22 + q30 * q30 + q31 * q31 + q32 * q32)
+        energy[e] = V * (0.5 * mu[e] * (Jm23 * I1 - 3.0) + 0.5 * K[e] * (J - 1.0) * (J - 1.0)) + 0.5 * k * hg
+
+
+@njit(**_KERNEL)
+def _element_forces_nb(u, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, store_f, energy, want_energy):  # pragma: no cover - compiled
+    """Element forces, elements split over numba's threads (race-free: one writer per element)."""
+    for e in prange(conn.shape[0]):
+        _element_force(e, u, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, store_f, energy, want_energy)
+
+
+@njit(**_SERIAL)
+def _element_forces_serial(u, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, store_f, energy, want_energy):  # pragma: no cover - compiled
+    """Element forces on one thread: small meshes, where thread start-up dominates."""
+    for e in range(conn.shape[0]):
+        _element_force(e, u, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, store_f, energy, want_energy)
+
+
+@njit(inline="always", error_model="numpy", fastmath=_FASTMATH)
+def _integrate_node(n, fe_flat, ptr, slot, R, A, B, C, u, uprev, unew):  # pragma: no cover - compiled
+    """Gather node n's force from its (element, local node) slots, then the
+    central-difference update u⁺ = A (R − F) + B u + C u⁻ of its three DOFs."""
+    f0 = 0.0
+    f1 = 0.0
+    f2 = 0.0
+    for p in range(ptr[n], ptr[n + 1]):
+        s = slot[p]
+        f0 += fe_flat[s, 0]
+        f1 += fe_flat[s, 1]
+        f2 += fe_flat[s, 2]
+    unew[n, 0] = A[n, 0] * (R[n, 0] - f0) + B[n, 0] * u[n, 0] + C[n, 0] * uprev[n, 0]
+    unew[n, 1] = A[n, 1] * (R[n, 1] - f1) + B[n, 1] * u[n, 1] + C[n, 1] * uprev[n, 1]
+    unew[n, 2] = A[n, 2] * (R[n, 2] - f2) + B[n, 2] * u[n, 2] + C[n, 2] * uprev[n, 2]
+
+
+@njit(**_KERNEL)
 def _integrate_nb(fe_flat, ptr, slot, R, A, B, C, u, uprev, unew):  # pragma: no cover - compiled
+    """Assembly + time integration, nodes split over threads (each node written once)."""
     for n in prange(u.shape[0]):
-        f0 = 0.0
-        f1 = 0.0
-        f2 = 0.0
-        for p in range(ptr[n], ptr[n + 1]):
-            s = slot[p]
-            f0 += fe_flat[s, 0]
-            f1 += fe_flat[s, 1]
-            f2 += fe_flat[s, 2]
-        unew[n, 0] = A[n, 0] * (R[n, 0] - f0) + B[n, 0] * u[n, 0] + C[n, 0] * uprev[n, 0]
-        unew[n, 1] = A[n, 1] * (R[n, 1] - f1) + B[n, 1] * u[n, 1] + C[n, 1] * uprev[n, 1]
-        unew[n, 2] = A[n, 2] * (R[n, 2] - f2) + B[n, 2] * u[n, 2] + C[n, 2] * uprev[n, 2]
+        _integrate_node(n, fe_flat, ptr, slot, R, A, B, C, u, uprev, unew)
 
 
-@njit(parallel=True, cache=True, boundscheck=False)
+@njit(**_SERIAL)
+def _integrate_serial(fe_flat, ptr, slot, R, A, B, C, u, uprev, unew):  # pragma: no cover - compiled
+    """Assembly + time integration on one thread."""
+    for n in range(u.shape[0]):
+        _integrate_node(n, fe_flat, ptr, slot, R, A, B, C, u, uprev, unew)
+
+
+@njit(**_KERNEL)
 def _gather_nb(fe_flat, ptr, slot, out):  # pragma: no cover - compiled
+    """Assembled nodal forces out[n] = Σ over n's slots of fe_flat[slot]."""
     for n in prange(out.shape[0]):
         f0 = 0.0
         f1 = 0.0
@@ -413,6 +477,10 @@ class Frame:
         ½ Σ M v² with the centred velocity (u(t+dt) − u(t−dt)) / 2dt (J).
     strain_energy : float
         Σₑ V W(X) + ½ uᵀ HG u, hourglass energy included (J).
+    velocity : ndarray (n, 3) or None
+        The centred velocity (u(t+dt) − u(t−dt)) / 2dt (m/s); with
+        ``displacement`` it restarts a run (``initial_displacement``,
+        ``initial_velocity``) where this one stood, e.g. from a checkpoint.
     """
 
     step: int
@@ -420,6 +488,7 @@ class Frame:
     displacement: np.ndarray
     kinetic_energy: float
     strain_energy: float
+    velocity: np.ndarray | None = None
 
 
 ElementHook = Callable[[int, float, np.ndarray, np.ndarray], "np.ndarray | None"]
@@ -455,7 +524,11 @@ class TLEDSolver:
         (e,) array of factors to scale each element's forces. Both arrays are
         reused between steps: copy what must be kept.
     backend : {"numba", "numpy"}
-        The parallel numba kernels, or the plain-numpy reference.
+        The numba kernels, or the plain-numpy reference.
+    parallel : bool, optional
+        Split the numba loops over threads (:func:`set_threads`). Default: only
+        for meshes of at least ``PARALLEL_MIN_ELEMENTS`` elements, since on small
+        meshes the two thread start-ups per step cost more than the work.
 
     Examples
     --------
@@ -473,7 +546,8 @@ class TLEDSolver:
     def __init__(self, mesh: HexMesh, materials: NeoHookean | Sequence[NeoHookean], *, dt: float,
                  damping: float = 0.0, hourglass_kappa: float = DEFAULT_HOURGLASS_KAPPA,
                  fixed=None, prescribed: Sequence = (), forces: Sequence = (),
-                 element_hook: ElementHook | None = None, backend: str = "numba"):
+                 element_hook: ElementHook | None = None, backend: str = "numba",
+                 parallel: bool | None = None):
         if backend not in ("numba", "numpy"):
             raise InputError(f"unknown TLED backend {backend!r}; use 'numba' or 'numpy'")
         if not (np.isfinite(damping) and damping >= 0):
@@ -486,6 +560,12 @@ class TLEDSolver:
         self.kappa = float(hourglass_kappa)
         self.element_hook = element_hook
         n, ne = mesh.n_nodes, mesh.n_elements
+        self.parallel = ne >= PARALLEL_MIN_ELEMENTS if parallel is None else bool(parallel)
+        if backend == "numba":
+            self._elem_kernel = _element_forces_nb if self.parallel else _element_forces_serial
+            self._int_kernel = _integrate_nb if self.parallel else _integrate_serial
+        else:
+            self._elem_kernel = _element_forces_np
         if ne == 0:
             raise InputError("the hex mesh has no elements")
 
@@ -533,7 +613,9 @@ class TLEDSolver:
         self._C = np.ascontiguousarray(C[:, None] * self.free)
 
         self.prescribed = [(self._node_ids(ids, f"prescribed[{i}]"), f) for i, (ids, f) in enumerate(prescribed)]
-        self.forces = [(self._node_ids(ids, f"forces[{i}]"), f) for i, (ids, f) in enumerate(forces)]
+        self.forces = [(self._node_ids(ids, f"forces[{i}]", unique=True), f) for i, (ids, f) in enumerate(forces)]
+        self._force_nodes = (np.unique(np.concatenate([ids for ids, _ in self.forces]))
+                             if self.forces else np.zeros(0, dtype=np.int64))
 
         # Node -> (element, local node) map as CSR over flat slots e*8 + a.
         flat = self.conn.ravel()
@@ -551,7 +633,7 @@ class TLEDSolver:
 
     # -- set-up helpers -----------------------------------------------------
 
-    def _node_ids(self, ids, what: str) -> np.ndarray:
+    def _node_ids(self, ids, what: str, unique: bool = False) -> np.ndarray:
         ids = np.asarray(ids)
         if ids.dtype == bool:
             if ids.shape != (self.mesh.n_nodes,):
@@ -561,6 +643,8 @@ class TLEDSolver:
         if ids.size and (ids.min() < 0 or ids.max() >= self.mesh.n_nodes):
             raise InputError(f"{what}: node ids must lie in 0..{self.mesh.n_nodes - 1}, "
                              f"got {ids.min()}..{ids.max()}")
+        if unique and len(np.unique(ids)) != len(ids):
+            raise InputError(f"{what}: node ids repeat; give each node once (sum its forces)")
         return ids
 
     def _free_mask(self, fixed) -> np.ndarray:
@@ -577,6 +661,8 @@ class TLEDSolver:
     @staticmethod
     def _values(f, t, k: int, what: str) -> np.ndarray:
         v = np.asarray(f(t), dtype=np.float64)
+        if v.shape == (k, 3):
+            return v
         try:
             v = np.broadcast_to(v, (k, 3))
         except ValueError:
@@ -586,8 +672,7 @@ class TLEDSolver:
     # -- kernels ------------------------------------------------------------
 
     def _element_forces(self, u: np.ndarray, want_energy: bool) -> None:
-        kern = _element_forces_nb if self.backend == "numba" else _element_forces_np
-        kern(u, self.conn, self.dhdx, self.volume, self.gamma, self.hourglass_stiffness, self.mu, self.K,
+        self._elem_kernel(u, self.conn, self.dhdx, self.volume, self.gamma, self.hourglass_stiffness, self.mu, self.K,
              self._fe, self._jac, self._fdef, self.element_hook is not None, self._energy, want_energy)
 
     def internal_forces(self, u: np.ndarray) -> np.ndarray:
@@ -620,8 +705,9 @@ class TLEDSolver:
         return {"F": F, "J": J, "S": S, "cauchy": F @ S @ np.swapaxes(F, 1, 2) / J[:, None, None]}
 
     def _check(self, step: int, t: float) -> None:
-        jmin = self._jac.min()
-        if jmin > 0 and np.isfinite(jmin) and np.isfinite(self._jac.max()):
+        # NaN propagates through min(); an infinite displacement makes the
+        # next step's J NaN, so one reduction a step catches every blow-up.
+        if self._jac.min() > 0.0:
             return
         bad = np.flatnonzero(~(self._jac > 0) | ~np.isfinite(self._jac))
         e = int(bad[0])
@@ -645,7 +731,7 @@ class TLEDSolver:
     def _external(self, t: float) -> np.ndarray:
         R = self._R
         if self.forces:
-            R.fill(0.0)
+            R[self._force_nodes] = 0.0
             for i, (ids, f) in enumerate(self.forces):
                 R[ids] += self._values(f, t, len(ids), f"forces[{i}]")
         return R
@@ -701,7 +787,7 @@ class TLEDSolver:
                 self._apply_hook(step, t)
             R = self._external(t)
             if numba_backend:
-                _integrate_nb(fe_flat, self._ptr, self._slot, R, self._A, self._B, self._C, u, u_prev, u_new)
+                self._int_kernel(fe_flat, self._ptr, self._slot, R, self._A, self._B, self._C, u, u_prev, u_new)
             else:
                 _gather_np(fe_flat, self._conn_flat, force0)
                 np.multiply(self._A, R - force0, out=u_new)
@@ -710,7 +796,7 @@ class TLEDSolver:
             if output:
                 v = (u_new - u_prev) / (2.0 * dt)
                 yield Frame(step, t, u.copy(), float(0.5 * np.einsum("n,ni,ni->", self.mass, v, v)),
-                            float(self._energy.sum()))
+                            float(self._energy.sum()), v)
             u_prev, u, u_new = u, u_new, u_prev
 
 
