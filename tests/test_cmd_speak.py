@@ -316,6 +316,27 @@ def test_speak_refuses_existing_output(short, capsys):
     assert export.read_video_info(short / "short.mp4")["n_frames"] == N_SHORT
 
 
+def test_speak_exports_only_needs_no_renderer(short, capsys, monkeypatch):
+    from visemeface.render import renderer
+
+    def no_gl(*a, **k):
+        raise AssertionError("the renderer must not be created without video or frames")
+
+    monkeypatch.setattr(renderer, "Renderer", no_gl)
+    assert main(["speak", "short.txt", "--no-video", "--pc2", "a.pc2", "--gltf", "a.glb", "-q"]) == 0
+    assert sorted(p.name for p in short.iterdir()) == ["a.glb", "a.pc2", "short.txt", "short.wav"]
+    assert export.read_pc2(short / "a.pc2")[1]["num_samples"] == N_SHORT
+
+
+def test_speak_warns_when_audio_length_differs(short, capsys):
+    sf.write(short / "long.wav", np.zeros(32000, np.float32), 16000)  # 2 s for 0.8 s of speech
+    assert main(["speak", "short.txt", "--size", "32", "--audio", "long.wav", "-q"]) == 0
+    err = capsys.readouterr().err
+    assert "warning: long.wav: the audio lasts 2.00 s, the animation 0.80 s; the audio is cut" in err
+    info = export.read_video_info(short / "short.mp4")
+    assert info["audio_samples"] / info["audio_rate"] == pytest.approx(0.8, abs=2e-3)
+
+
 def test_say_text_to_video(short, capsys):
     from visemeface.speech.timeline import load_track
 

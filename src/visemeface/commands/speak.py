@@ -105,6 +105,16 @@ def render_segments(segments, args, out, settings) -> int:
     ranges = {n: tuple(r) for n, r in zip(rig.names, rig.ranges)}
     track = activation_track(segments, load_visemes(rig=rig), fps=args.fps, mode=args.interp,
                              emotions=emotions or None, ranges=ranges)
+    if settings.audio is not None and out.video is not None:
+        import warnings
+
+        from visemeface.pipeline import check_audio
+
+        audio_s, video_s = check_audio(settings.audio), len(track) / args.fps
+        if abs(audio_s - video_s) > 1.0 / args.fps:
+            what = "padded with silence" if audio_s < video_s else "cut"
+            warnings.warn(f"{settings.audio}: the audio lasts {audio_s:.2f} s, the animation {video_s:.2f} s; "
+                          f"the audio is {what} to the animation", stacklevel=2)
     stats = animate(track, rig, out, settings, end_time=float(segments["end"].iloc[-1]))
     if not args.quiet:
         written = [str(p) for p in out.paths().values()]
