@@ -89,7 +89,7 @@ def render_images(folder: Path, force: bool) -> None:
     from visemeface.render.renderer import Renderer
 
     f = ["--force"] if force else []
-    if cli(["sheet", "-o", str(folder / "visemes.png"), "--size", "160", *f]) != 0:
+    if cli(["sheet", "-o", str(folder / "visemes.png"), "--size", "128", *f]) != 0:
         raise SystemExit(2)
     if cli(["sheet", "--emotions", "-o", str(folder / "emotions.png"), "--size", "256", *f]) != 0:
         raise SystemExit(2)
@@ -99,7 +99,7 @@ def render_images(folder: Path, force: bool) -> None:
     images = [r.render(posed_vertices(rig, v, e)) for v, e in panels]
     sheet = compose_sheet(images, ["Viseme /ah/", "Happy /ah/", "Expression 'Happiness'"], columns=3)
     with atomic_output(folder / "happy_ah.png", force) as tmp:
-        Image.fromarray(sheet).save(tmp, format="PNG")
+        Image.fromarray(sheet).save(tmp, format="PNG", optimize=True)
 
 
 def main(argv=None) -> int:

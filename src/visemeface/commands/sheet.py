@@ -105,6 +105,6 @@ def run(args) -> int:
               for v, e in progress(poses, desc="rendering", unit="posture")]
     sheet = compose_sheet(images, labels, columns)
     with atomic_output(args.output, args.force) as tmp:
-        Image.fromarray(sheet).save(tmp, format="PNG")
+        Image.fromarray(sheet).save(tmp, format="PNG", optimize=True)
     print(f"wrote {args.output} ({len(images)} postures, {sheet.shape[1]}x{sheet.shape[0]})")
     return 0

@@ -1,0 +1,59 @@
+"""Objective class test of the visemes (scripts/viseme_class_test.py): every Table-2 class >= 95%."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+SCRIPT = Path(__file__).resolve().parent.parent / "scripts" / "viseme_class_test.py"
+
+
+@pytest.fixture(scope="module")
+def ct():
+    spec = importlib.util.spec_from_file_location("viseme_class_test", SCRIPT)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_leave_one_out_excludes_the_sample_from_its_centroid(ct):
+    X = np.array([[0.0], [2.9], [4.0], [5.0]])
+    y = np.array(["A", "A", "B", "B"])
+    # with itself in A's centroid (1.45) 2.9 would stay in A; left out, A's centroid is 0 and B (4.5) is nearer
+    assert ct.nearest_centroid_loo(X, y).tolist() == ["A", "B", "B", "B"]
+    with pytest.raises(ValueError, match="fewer than two"):
+        ct.nearest_centroid_loo(X[:3], np.array(["A", "A", "B"]))
+
+
+def test_features_of_rest_are_zero(ct):
+    from visemeface.muscles.measure import LipGauge
+    from visemeface.muscles.rig import default_rig
+
+    rig = default_rig()
+    np.testing.assert_allclose(ct.lip_features(LipGauge(rig.face), rig.rest), 0.0, atol=1e-12)
+
+
+@pytest.fixture(scope="module")
+def samples(ct):
+    return ct.class_samples()
+
+
+def test_samples_are_physically_plausible(samples):
+    by = samples[samples.condition == "1"].set_index("symbol")
+    # bilabials closed, open /ao/ taller than rounded /ow/ taller than /w/
+    assert by.loc[["p", "b", "m"], "opening_height"].abs().max() < 0.02
+    assert by.loc["ao", "opening_height"] > by.loc["ow", "opening_height"] > by.loc["w", "opening_height"]
+    # rounded postures are narrower and more protruded than the spread class
+    assert by.loc[["w", "ow"], "mouth_width"].max() < by.loc[["ae", "eh", "ih"], "mouth_width"].min()
+    assert by.loc[["w", "ow"], "protrusion"].min() > by.loc[["ae", "eh", "ih"], "protrusion"].max()
+
+
+def test_every_class_recognised_at_least_95_percent(ct, samples):
+    m = ct.confusion(samples)
+    assert m.shape == (8, 8)
+    np.testing.assert_allclose(m.sum(axis=1), 1.0)
+    rates = np.diag(m.to_numpy())
+    assert (rates >= 0.95).all(), m.round(2).to_string()
