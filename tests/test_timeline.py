@@ -184,6 +184,21 @@ def test_global_emotion_adds_weighted_vector_and_clamps():
     assert strong.to_numpy().max() <= 1.0 and strong["zygomatic_major_left"].iloc[0] == 1.0
 
 
+@pytest.mark.parametrize("mode", MODES)
+def test_lips_still_close_under_an_emotion_that_drops_the_jaw(mode):
+    seg = segs(["aa", "b", "iy", "m", "ae", "p", "uw", "f", "aa"], 1 / 15)
+    track = activation_track(seg, toy_visemes(), fps=30, mode=mode, emotions={"surprise": 1.0},
+                             expressions=expressions())
+    t = track.index.to_numpy()
+    for s, e, p in zip(seg.start, seg.end, seg.phoneme):
+        if p in ("p", "b", "m"):
+            inside = (t >= s) & (t <= e)
+            assert ((track["jaw"][inside] == 0.0) & (track["closure"][inside] == 1.0)).any(), p
+    # Away from the closures the surprise still opens the jaw (by its 0.3, up to rounding of the ramp).
+    plain = activation_track(seg, toy_visemes(), fps=30, mode=mode)
+    assert track["jaw"].max() >= plain["jaw"].max() + 0.25
+
+
 def test_emotion_key_track_ramps_smoothly():
     seg = segs(["aa"] * 10, 0.1)                           # 1.6 s
     keys = pd.DataFrame({"time": [0.5, 1.2], "emotion": ["anger", "neutral"], "weight": [1.0, 0.0]})

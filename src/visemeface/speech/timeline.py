@@ -55,7 +55,10 @@ ramp of ``emotion_ramp`` seconds centred on its key. Each frame is then
 
 .. math:: a(t) = v(t) + \\sum_e w_e(t)\\, E_e ,
 
-clamped to ``ranges`` (default: each column to
+except that on the lip-opening functions (:data:`LIP_OPENING`: jaw, depressor
+labii inferioris, levator labii superioris) the emotion term is scaled by
+:math:`1 - \\max_s w_s(t)` for the forced p b m f v segments, so a surprised
+/b/ still closes; the result is clamped to ``ranges`` (default: each column to
 :math:`[\\min(0, \\text{table min}), \\max(1, \\text{table max})]`).
 """
 
@@ -82,6 +85,10 @@ __all__ = ["MODES", "activation_track", "dominance_table", "emotion_weights", "l
 MODES = ("coarticulation", "linear", "cosine")
 #: Phonemes whose target is forced at their centre (lip closure / lip-teeth contact).
 FORCED = frozenset(CLOSURE) | frozenset(LABIODENTAL)
+#: Rig functions that open the lips (seed 002 Table 1: jaw rotation, depressor labii lowers the
+#: bottom lip, levator labii superioris raises the upper one): an emotion does not move them
+#: while a p b m f v target is forced, so closure and contact survive e.g. surprise's jaw drop.
+LIP_OPENING = ("jaw", "depressor_labii_inferioris", "levator_labii_superioris")
 
 
 @lru_cache(maxsize=1)
@@ -184,6 +191,9 @@ def _keyed(times, start, end, targets, edge, ease):
 def _force_contacts(values, times, start, end, phones, targets, fps, edge):
     """Pull the track to the target of every p b m f v segment around its centre (see module doc).
 
+    Returns the new values and, per frame, the largest forcing weight (1 where a
+    segment's exact target is shown).
+
     Between adjacent forced segments (``b m``, ``v b``) the first holds its target up to
     the boundary + r and the second fades in over [boundary - r, boundary + r], so the
     lips stay in contact through the cluster while moving smoothly from one target to
@@ -192,6 +202,7 @@ def _force_contacts(values, times, start, end, phones, targets, fps, edge):
     frame = 1.0 / fps
     n = len(phones)
     forced = [p in FORCED for p in phones]
+    strength = np.zeros(times.size)
     dur = end - start
     hold = np.maximum.reduce([_held_half_width(start, end, edge), dur / 4,
                               np.full(n, 0.5 * frame * (1 + 1e-9))])
@@ -222,7 +233,8 @@ def _force_contacts(values, times, start, end, phones, targets, fps, edge):
         u = np.clip((d - hold_t) / np.where(ramp_t > 0, ramp_t, 1.0), 0.0, 1.0)
         w = np.where(d <= hold_t, 1.0, np.where(ramp_t > 0, (1 + np.cos(np.pi * u)) / 2, 0.0))
         values[lo:hi] = values[lo:hi] * (1 - w)[:, None] + targets[s][None, :] * w[:, None]
-    return values
+        strength[lo:hi] = np.maximum(strength[lo:hi], w)
+    return values, strength
 
 
 def _frame_times(total: float, fps: float) -> np.ndarray:
@@ -230,9 +242,7 @@ def _frame_times(total: float, fps: float) -> np.ndarray:
     return np.arange(n) / fps
 
 
-def speech_track(segments: pd.DataFrame, visemes: pd.DataFrame, fps: float = 30.0,
-                 mode: str = "coarticulation", edge: float = 0.06) -> pd.DataFrame:
-    """The viseme part of the track (no emotion, no clamping); see the module doc."""
+def _speech(segments, visemes, fps, mode, edge):
     if mode not in MODES:
         raise InputError(f"unknown interpolation mode {mode!r}; choose one of {', '.join(MODES)}"
                          f"{close_matches(str(mode), MODES)}")
@@ -245,7 +255,14 @@ def speech_track(segments: pd.DataFrame, visemes: pd.DataFrame, fps: float = 30.
         values = _coarticulation(times, start, end, phones, targets, edge)
     else:
         values = _keyed(times, start, end, targets, edge, ease=(mode == "cosine"))
-    values = _force_contacts(values, times, start, end, phones, targets, float(fps), edge)
+    values, strength = _force_contacts(values, times, start, end, phones, targets, float(fps), edge)
+    return times, values, columns, strength
+
+
+def speech_track(segments: pd.DataFrame, visemes: pd.DataFrame, fps: float = 30.0,
+                 mode: str = "coarticulation", edge: float = 0.06) -> pd.DataFrame:
+    """The viseme part of the track (no emotion, no clamping); see the module doc."""
+    times, values, columns, _ = _speech(segments, visemes, fps, mode, edge)
     track = pd.DataFrame(values, index=pd.Index(times, name="time"), columns=columns)
     track.attrs["fps"] = float(fps)
     return track
@@ -361,9 +378,7 @@ def activation_track(segments: pd.DataFrame, visemes: pd.DataFrame, fps: float =
     >>> track.loc[0.25].tolist()        # the frame at the centre of /m/
     [0.0, 0.8]
     """
-    speech = speech_track(segments, visemes, fps=fps, mode=mode, edge=edge)
-    columns = list(speech.columns)
-    values = speech.to_numpy()
+    times, values, columns, contact_strength = _speech(segments, visemes, fps, mode, edge)
     base: dict[str, float] = {}
     keys = [_keys_frame(segments.attrs.get("emotion_keys"))] if "emotion_keys" in segments.attrs else []
     if isinstance(emotions, Mapping):
@@ -394,8 +409,13 @@ def activation_track(segments: pd.DataFrame, visemes: pd.DataFrame, fps: float =
             columns += [str(c) for c in extra]
             values = np.hstack([values, np.zeros((values.shape[0], len(extra)))])
         E = expr.reindex(columns=columns, fill_value=0.0).loc[names].to_numpy(dtype=float)
-        W = emotion_weights(speech.index.to_numpy(), names, base, key_track, emotion_ramp)
-        values = values + W @ E
+        W = emotion_weights(times, names, base, key_track, emotion_ramp)
+        added = W @ E
+        # Keep lip closure / contact: the emotion does not move the lip-opening functions
+        # while a p b m f v target is forced.
+        mouth = [j for j, c in enumerate(columns) if c.startswith(LIP_OPENING)]
+        added[:, mouth] *= (1.0 - contact_strength)[:, None]
+        values = values + added
         for c in expr.columns:
             table_lo[c] = min(table_lo.get(c, 0.0), float(expr[c].min()))
             table_hi[c] = max(table_hi.get(c, 1.0), float(expr[c].max()))
@@ -406,7 +426,7 @@ def activation_track(segments: pd.DataFrame, visemes: pd.DataFrame, fps: float =
             if c in ranges:
                 lo[j], hi[j] = ranges[c]
     values = np.clip(values, lo, hi)
-    track = pd.DataFrame(values, index=speech.index.copy(), columns=columns)
+    track = pd.DataFrame(values, index=pd.Index(times, name="time"), columns=columns)
     track.attrs["fps"] = float(fps)
     return track
 
