@@ -300,6 +300,18 @@ def test_textgrid_bad_label_reports_the_interval_line(tmp_path):
     assert e.value.line == LONG_TG.splitlines().index('        intervals [4]:') + 1
 
 
+def test_short_textgrid_bad_label_reports_its_line(tmp_path):
+    tg = textgrid.Textgrid()
+    tg.addTier(textgrid.IntervalTier("words", [(0.0, 0.5, "bob")], 0, 0.8))
+    tg.addTier(textgrid.IntervalTier("phones", [(0.05, 0.15, "b"), (0.15, 0.4, "ʘ"), (0.4, 0.5, "b")], 0, 0.8))
+    p = tmp_path / "short.TextGrid"
+    tg.save(str(p), format="short_textgrid", includeBlankSpaces=True)
+    with pytest.raises(InputError, match="unknown ipa phone 'ʘ'") as e:
+        read_transcript(p)
+    lines = p.read_text(encoding="utf-8").splitlines()
+    assert lines[e.value.line - 1:e.value.line + 2] == ["0.15", "0.4", '"ʘ"']   # xmin, xmax, text
+
+
 def test_garbage_textgrid(tmp_path):
     p = write(tmp_path, "bad.TextGrid", 'File type = "ooTextFile"\nObject class = "TextGrid"\nxmin = zero\n')
     with pytest.raises(InputError, match="not a readable TextGrid") as e:

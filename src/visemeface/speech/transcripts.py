@@ -508,16 +508,35 @@ def _parse_textgrid(text, where, tier=None, **_):
     return rows
 
 
+_TG_TOKEN = re.compile(r'"(?:[^"]|"")*"|<exists>|[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?')
+
+
 def _interval_lines(text: str, tier_index: int):
-    """Map interval k of tier ``tier_index`` to its line in a long-format TextGrid (else None)."""
+    """Map interval k of tier ``tier_index`` to its line in the TextGrid text (None if unknown).
+
+    Long format: the line of ``intervals [k]:``. Short format: Praat's token stream
+    (``<exists>``, tier count, then per tier class, name, xmin, xmax, size and
+    xmin/xmax/text per interval), each token's line counted.
+    """
     lines = text.split("\n")
     item = [i for i, ln in enumerate(lines) if re.match(r"\s*item ?\[\d+\]:", ln)]
-    if tier_index >= len(item):
+    if item:
+        if tier_index >= len(item):
+            return lambda k: None
+        lo = item[tier_index]
+        hi = item[tier_index + 1] if tier_index + 1 < len(item) else len(lines)
+        found = [i + 1 for i in range(lo, hi) if re.match(r"\s*intervals ?\[\d+\]:", lines[i])]
+        return lambda k: found[k] if k < len(found) else None
+    tokens = [(m.group(0), text.count("\n", 0, m.start()) + 1) for m in _TG_TOKEN.finditer(text)]
+    try:
+        pos = [t for t, _ in tokens].index("<exists>") + 2          # past <exists> and the tier count
+        for _ in range(tier_index + 1):
+            klass, size = tokens[pos][0], int(float(tokens[pos + 4][0]))
+            start = pos + 5
+            pos = start + size * (3 if "Interval" in klass else 2)
+    except (ValueError, IndexError):
         return lambda k: None
-    lo = item[tier_index]
-    hi = item[tier_index + 1] if tier_index + 1 < len(item) else len(lines)
-    found = [i + 1 for i in range(lo, hi) if re.match(r"\s*intervals ?\[\d+\]:", lines[i])]
-    return lambda k: found[k] if k < len(found) else None
+    return lambda k: tokens[start + 3 * k][1] if start + 3 * k < len(tokens) else None
 
 
 def _parse_mfa_json(text, where, tier=None, **_):
