@@ -84,9 +84,10 @@ def test_frame_folder_interrupted_then_resumed(tmp_path):
         got = []
         for i in range(3):
             if ff.has(i):
-                got.append(ff.read(i))
+                got.append(ff.read(i, (16, 16, 3)))
             else:
                 ff.write(i, _img(i))
+        assert ff.read(0, (32, 32, 3)) is None  # a frame of another size is not reused
         ff.finish(3)
     assert (ff.kept, ff.rendered) == (2, 1)
     np.testing.assert_array_equal(got[1], _img(1))

@@ -21,7 +21,7 @@ Resuming
 written under a temporary name and renamed, so any ``frame_NNNNNN.png`` found
 there is complete. A hidden manifest (``.visemeface-frames.json``) records a
 SHA-256 *render key* of everything the pixels depend on: the package version,
-the frame size and view, the face (vertices, triangles, colours), the rig (its
+the frame size, view and antialiasing, the face (vertices, triangles, colours), the rig (its
 displacement for each unit activation and for the jaw at several openings) and
 the activation track itself. When every frame is written the folder is renamed
 to ``DIR``. After an interruption, ``--resume`` reuses the frames in
@@ -291,9 +291,16 @@ class FrameFolder:
     def has(self, index: int) -> bool:
         return self.resume and (self.partial / export.frame_name(index)).is_file()
 
-    def read(self, index: int) -> np.ndarray:
+    def read(self, index: int, shape: tuple[int, ...]) -> np.ndarray | None:
+        """The kept frame ``index``, or None if it cannot be read or has another shape."""
+        try:
+            image = export.read_png(self.partial / export.frame_name(index))
+        except InputError:
+            return None
+        if image.shape != shape:
+            return None
         self.kept += 1
-        return export.read_png(self.partial / export.frame_name(index))
+        return image
 
     def write(self, index: int, image: np.ndarray) -> None:
         export.write_png(self.partial / export.frame_name(index), image)
@@ -440,9 +447,10 @@ def animate(track: pd.DataFrame, rig, out: Outputs, settings: RenderSettings,
             if obj is not None or pc2 is not None or (renderer is not None and not kept):
                 verts = np.asarray(rig.pose(a[i]))
             if need_image:
-                if kept:
-                    image = frames.read(i)
-                else:
+                image = frames.read(i, (settings.size, settings.size, 3)) if kept else None
+                if image is None:
+                    if verts is None:
+                        verts = np.asarray(rig.pose(a[i]))
                     image = renderer.render(verts)
                     if frames is not None:
                         frames.write(i, image)
