@@ -264,8 +264,9 @@ class Renderer:
             raise RuntimeError(f"cannot create a headless OpenGL (EGL) context: {exc}") from None
         ctx = self.ctx
         self.program = ctx.program(vertex_shader=_VERTEX_SHADER, fragment_shader=_FRAGMENT_SHADER)
-        self.program["u_mvp"].write(self.mvp.T.astype("f4").tobytes())
-        self.program["u_view"].write(self.view_matrix.T.astype("f4").tobytes())
+        for name, matrix in (("u_mvp", self.mvp), ("u_view", self.view_matrix)):
+            if name in self.program:          # a uniform the shader does not use is optimised away
+                self.program[name].write(matrix.T.astype("f4").tobytes())
         n = self.face.n_vertices
         self._vbo_data = np.empty((n, 6), dtype="f4")
         self.vbo = ctx.buffer(reserve=self._vbo_data.nbytes, dynamic=True)
