@@ -333,3 +333,14 @@ def test_numba_kernel_matches_numpy_at_large_compression_and_stretch():
         u = m.nodes @ F.T - m.nodes + rng.normal(0, 1e-5, m.nodes.shape)
         a, b = fast.internal_forces(u), ref.internal_forces(u)
         assert np.abs(a - b).max() < 1e-12 * np.abs(b).max()
+
+
+def test_docstring_examples_run():
+    import doctest
+
+    import visemeface.physics as physics
+    from visemeface.physics import hexmesh, materials, tled
+
+    for module in (physics, hexmesh, materials, tled):
+        result = doctest.testmod(module)
+        assert result.failed == 0 and result.attempted > 0, module.__name__
