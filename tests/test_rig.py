@@ -269,3 +269,38 @@ def test_rig_file_syntax_and_missing(tmp_path):
     text = _default_text().replace('name = "mentalis"', 'name = "risorius"')
     with pytest.raises(InputError, match="defined twice"):
         MuscleRig.from_file(face, _write(tmp_path, text))
+
+
+def test_rig_follows_a_moved_scaled_face():
+    # Placement is relative to landmarks: a face scaled, rotated and moved gets the same
+    # muscles, so every basis field is the rotated, scaled original.
+    import dataclasses
+
+    ref = default_rig()
+    s = 1.3
+    c, sn = np.cos(0.4), np.sin(0.4)
+    rot = np.array([[c, 0, sn], [0, 1, 0], [-sn, 0, c]]) @ np.array([[1, 0, 0], [0, np.cos(0.2), -np.sin(0.2)],
+                                                                      [0, np.sin(0.2), np.cos(0.2)]])
+    moved = dataclasses.replace(ref.face, vertices=s * ref.rest @ rot.T + np.array([0.1, -0.2, 0.3]))
+    rig = MuscleRig.from_file(moved)
+    np.testing.assert_allclose(rig.bases, s * ref.bases @ rot.T, atol=1e-12)
+    np.testing.assert_allclose(rig.jaw_displacement(0.6), s * ref.jaw_displacement(0.6) @ rot.T, atol=1e-12)
+    pose = {"orbicularis_oris": 0.5, "jaw": 0.4, "risorius_left": 0.3}
+    a, b = lip_changes(moved, rig.pose(pose)), lip_changes(ref.face, ref.pose(pose))
+    for k in a:
+        assert a[k] == pytest.approx(b[k], abs=1e-6), k
+
+
+def test_mesh_without_eyes_region_still_rigs():
+    import dataclasses
+
+    ref = default_rig()
+    regions = {k: v for k, v in ref.face.regions.items() if k != "eyes"}
+    rig = MuscleRig.from_file(dataclasses.replace(ref.face, regions=regions))
+    assert rig.muscles[0].exclude == ()
+    text = _default_text().replace('exclude = ["eyes"]     # regions', 'exclude = ["eyse"]     # regions')
+    with pytest.raises(InputError, match="unknown region 'eyse'.*did you mean: eyes"):
+        import tempfile
+        from pathlib import Path
+        with tempfile.TemporaryDirectory() as d:
+            MuscleRig.from_file(ref.face, _write(Path(d), text))

@@ -59,6 +59,10 @@ SPEECH_FUNCTIONS = (
 
 LIP_SIDES = ("upper", "lower", "both")
 
+#: Region names of docs/conventions.md (a rig file may name them even if a mesh lacks some).
+CONVENTION_REGIONS = ("upper_lip", "lower_lip", "lip_seam_upper", "lip_seam_lower", "jaw", "fixed", "brow",
+                      "cheek", "mouth_cavity", "eyes")
+
 
 @dataclass(frozen=True)
 class MouthFrame:
@@ -176,6 +180,19 @@ class _RigFileReader:
             return tuple(value)
         raise AssertionError(kind)
 
+    def regions(self, names, entry: str, fld: str) -> tuple:
+        """The region names the face has; a name neither on the face nor in the
+        conventions' list is an error (a typo), a conventional one the face lacks
+        (a user's mesh without ``eyes``) is skipped."""
+        kept = []
+        for region in names:
+            if region in self.face.regions:
+                kept.append(region)
+            elif region not in CONVENTION_REGIONS:
+                raise self.error(entry, fld, f"unknown region {region!r}"
+                                 + close_matches(region, set(self.face.regions) | set(CONVENTION_REGIONS)))
+        return tuple(kept)
+
     def landmark(self, entry: str, fld: str, name: str) -> np.ndarray:
         if name not in self.face.landmarks:
             raise self.error(entry, fld, f"unknown landmark {name!r}" + close_matches(name, self.face.landmarks))
@@ -244,11 +261,8 @@ def _muscles_from(reader: _RigFileReader) -> list[Muscle]:
         sides = table.get("sides", [])
         if sides not in ([], ["left", "right"]):
             raise reader.error(base, "sides", f'expected ["left", "right"] or nothing, got {sides!r}')
-        exclude = default_exclude + reader.get(table, base, "exclude", "regions", ())
-        for region in exclude:
-            if region not in reader.face.regions:
-                raise reader.error(base, "exclude", f"unknown region {region!r}"
-                                   + close_matches(region, reader.face.regions))
+        exclude = reader.regions(default_exclude + reader.get(table, base, "exclude", "regions", ()),
+                                 base, "exclude")
         for side in sides or ["centre"]:
             name = f"{base}_{side}" if sides else base
             m = Muscle(name=name, kind=kind, side=side, lip=lip, range=rng, exclude=exclude,
@@ -399,7 +413,7 @@ class MuscleRig:
         seam = np.concatenate([face.region("lip_seam_upper"), face.region("lip_seam_lower")])
         corners = [face.landmarks["mouth_corner_left"], face.landmarks["mouth_corner_right"]]
         seam = np.unique(np.concatenate([seam, corners]))
-        surface = mf.seam_height(u, u[seam], local[seam, 1], smooth=trim["smooth"] / (frame.width / 2))
+        surface = mf.seam_height(u, u[seam], local[seam, 1], smooth=2.0 * trim["smooth"])  # W -> half-widths (u units)
         side = np.zeros(len(u))
         if "upper_lip" in face.regions:
             side[face.regions["upper_lip"]] = 1.0
@@ -449,9 +463,7 @@ class MuscleRig:
         }
         if not 0 <= jaw["corner_start"] < jaw["corner_end"]:
             raise reader.error("jaw", "corner_end", "need 0 <= corner_start < corner_end")
-        for region in jaw["exclude"]:
-            if region not in face.regions:
-                raise reader.error("jaw", "exclude", f"unknown region {region!r}" + close_matches(region, face.regions))
+        jaw["exclude"] = reader.regions(jaw["exclude"], "jaw", "exclude")
         if jaw["reach"] <= 0:
             raise reader.error("jaw", "reach", f"must be positive, got {jaw['reach']}")
         return cls(face, muscles, jaw, trim, frame, path)
