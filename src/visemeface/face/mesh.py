@@ -226,7 +226,6 @@ class FaceMesh:
 
     def boundary_edges(self) -> np.ndarray:
         """(E, 2) vertex pairs of edges used by exactly one triangle/quad side."""
-        tri = self.triangles
         # Quad diagonals are interior to a quad, so count quad sides and extra tris' sides only.
         q = self.quads
         edges = [q[:, [0, 1]], q[:, [1, 2]], q[:, [2, 3]], q[:, [3, 0]],
@@ -234,7 +233,6 @@ class FaceMesh:
         e = np.concatenate(edges)
         key = np.sort(e, axis=1)
         uniq, counts = np.unique(key, axis=0, return_counts=True)
-        del tri
         return uniq[counts == 1]
 
     # ------------------------------------------------------------------ files

@@ -351,13 +351,12 @@ def default_face(resolution: int | None = None, rest_gap: float = 0.0) -> FaceMe
     lid_band = 0.5 * ((_EYE_Y - _Y_SUBNASALE) / counts[4] + (_Y_TOP - _EYE_Y) / counts[6])
     knots = _knots(X, lid_band)
     knots0 = _knots(np.zeros(1), lid_band)
-    rows_y, rows_yc, band_of_row = [], [], []
+    rows_y, rows_yc = [], []
     for b, n in enumerate(counts):
         for r in range(n + (1 if b == len(counts) - 1 else 0)):
             f = r / n
             rows_y.append(knots[b] + (knots[b + 1] - knots[b]) * f)
             rows_yc.append(float((knots0[b] + (knots0[b + 1] - knots0[b]) * f)[0]))
-            band_of_row.append(b)
     Yg = np.array(rows_y)              # (nr, nc)
     Ycg = np.repeat(np.array(rows_yc)[:, None], nc, axis=1)
     nr = len(Yg)
@@ -392,7 +391,7 @@ def default_face(resolution: int | None = None, rest_gap: float = 0.0) -> FaceMe
     Ycv = np.empty(n_grid)
     Xg = np.broadcast_to(X, (nr, nc))
     gap = float(rest_gap) * np.sqrt(np.clip(1 - (X / _XC) ** 2, 0, None))
-    for idx, sign in ((idx_up, 0.5), (idx_lo, -0.5)):
+    for idx in (idx_up, idx_lo):
         Xv[idx] = Xg
         Yv[idx] = Yg
         Ycv[idx] = Ycg
