@@ -82,3 +82,12 @@ def test_posture_and_emotion_from_library(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "jaw=" in text and "zygomatic_major_left=" in text
     assert main(["pose", "aaa", "-o", str(tmp_path / "x.png"), "--size", "64"]) == 2
+
+
+def test_pose_a_loaded_mesh_with_landmarks(tmp_path, capsys):
+    from visemeface.face.procedural import default_face
+    mesh, _ = default_face(resolution=1500).save(tmp_path / "mine.obj")
+    out = tmp_path / "mine.png"
+    assert main(["pose", "--face", str(mesh), "--set", "jaw=0.5", "-o", str(out), "--size", "64"]) == 0
+    assert "opening_height=" in capsys.readouterr().out and out.exists()
+    assert main(["pose", "--face", str(tmp_path / "none.obj"), "-o", str(tmp_path / "n.png")]) == 2
