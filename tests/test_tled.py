@@ -344,3 +344,23 @@ def test_docstring_examples_run():
     for module in (physics, hexmesh, materials, tled):
         result = doctest.testmod(module)
         assert result.failed == 0 and result.attempted > 0, module.__name__
+
+
+def test_forces_on_all_nodes_and_on_overlapping_sets_add_up():
+    """The same loads given as one all-node field or as overlapping node sets move the mesh alike."""
+    m = box_mesh((2, 1, 1), (0.02, 0.01, 0.01))
+    n = m.n_nodes
+    field = np.zeros((n, 3))
+    field[m.node_sets["xmax"], 0] = 2e-3
+    field[m.node_sets["zmax"], 2] += 1e-3
+    whole = TLEDSolver(m, SOFT_TISSUE, dt=1e-4, damping=80.0, fixed=m.node_sets["xmin"],
+                       forces=[(np.arange(n), lambda t: field)])
+    parts = TLEDSolver(m, SOFT_TISSUE, dt=1e-4, damping=80.0, fixed=m.node_sets["xmin"],
+                       forces=[(m.node_sets["xmax"], lambda t: [2e-3, 0.0, 0.0]),
+                               (m.node_sets["zmax"], lambda t: [0.0, 0.0, 1e-3])])
+    a = list(whole.run(200, output_every=200))[-1].displacement
+    b = list(parts.run(200, output_every=200))[-1].displacement
+    assert np.abs(a).max() > 1e-5
+    assert np.allclose(a, b, rtol=1e-12, atol=1e-18)
+    with pytest.raises(InputError, match="node ids repeat"):
+        TLEDSolver(m, SOFT_TISSUE, dt=1e-4, forces=[([1, 1], lambda t: [0.0, 0.0, 1.0])])
