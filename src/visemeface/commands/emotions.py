@@ -29,7 +29,9 @@ def run(args) -> int:
         active = acts.loc[name]
         active = active[active != 0]
         muscles = ", ".join(f"{m}={v:g}" for m, v in active.items())
-        print(name.ljust(width) + "  " + row["action_units"])
-        for line in textwrap.wrap("muscles: " + muscles, width=100 - width):
+        lines = textwrap.wrap(row["action_units"], width=100 - width) or [""]
+        lines += textwrap.wrap("muscles: " + muscles, width=100 - width)
+        print(name.ljust(width) + "  " + lines[0])
+        for line in lines[1:]:
             print(" " * (width + 2) + line)
     return 0
