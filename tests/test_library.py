@@ -232,3 +232,29 @@ def test_parse_weights():
     for bad, msg in [("anger=-1", "negative"), ("anger=nan", "finite"), ("=2", "NAME=WEIGHT"), ("anger=x", "number")]:
         with pytest.raises(InputError, match=msg):
             lib.parse_weights(bad)
+
+
+def test_viseme_table_is_up_to_date_with_targets_and_rig(rig, visemes):
+    """visemes.csv poses the lips as well as a fresh fit of targets.csv on the current rig.
+
+    Fails when targets.csv or the rig changed without rerunning
+    ``PYTHONPATH=src python scripts/fit_visemes.py --force``.
+    """
+    import importlib.util
+    from pathlib import Path
+
+    from visemeface.muscles.measure import LipGauge
+
+    spec = importlib.util.spec_from_file_location(
+        "fit_visemes", Path(__file__).resolve().parent.parent / "scripts" / "fit_visemes.py")
+    fv = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(fv)
+    rows, report = fv.fit_table(rig)
+    gauge = LipGauge(rig.face)
+    stale = []
+    for row, rep in zip(rows, report):
+        got = gauge.changes(rig.pose(visemes.loc[row["symbol"]].to_numpy()))
+        worst = max(abs(got[k] - rep["achieved"][k]) for k in lib.TARGET_DIMENSIONS)
+        if worst > 0.01:
+            stale.append(f"{row['symbol']} ({worst:.3f})")
+    assert not stale, "visemes.csv is stale, rerun scripts/fit_visemes.py --force: " + ", ".join(stale)
