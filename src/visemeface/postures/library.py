@@ -39,6 +39,12 @@ from visemeface.muscles.measure import TARGET_DIMENSIONS  # lip-shape target col
 from visemeface.muscles.rig import SPEECH_FUNCTIONS  # seed 002 Table 1, re-exported
 from visemeface.resources import data_path
 
+__all__ = [
+    "EMOTIONS", "SPEECH_FUNCTIONS", "TARGET_DIMENSIONS", "blend", "expression_info", "expressions_file",
+    "load_expressions", "load_targets", "load_visemes", "parse_weights", "posed_vertices", "targets_file",
+    "viseme_info", "visemes_file",
+]
+
 #: The seven emotions every expression table must provide (seed 002's six + disgust).
 EMOTIONS: tuple[str, ...] = ("happiness", "sadness", "surprise", "fear", "anger", "contempt", "disgust")
 
