@@ -734,6 +734,9 @@ class TLEDSolver:
         R = self._R
         if self._all_nodes_force:              # one load on every node, in order: no indexing
             np.copyto(R, self._values(self.forces[0][1], t, len(R), "forces[0]"))
+        elif len(self.forces) == 1:            # unique ids: only they are ever non-zero
+            ids, f = self.forces[0]
+            R[ids] = self._values(f, t, len(ids), "forces[0]")
         elif self.forces:
             R[self._force_nodes] = 0.0
             for i, (ids, f) in enumerate(self.forces):
