@@ -290,6 +290,24 @@ def test_speak_resume_after_interruption_keeps_frames(short, capsys, monkeypatch
         np.testing.assert_array_equal(export.read_png(short / "fr2" / name), export.read_png(short / "fr" / name))
 
 
+def test_speak_resume_from_finished_frames_renders_nothing(short, capsys, monkeypatch):
+    from visemeface.render import renderer
+
+    assert main(["speak", "short.txt", "--size", "32", "--frames", "fr", "--no-video", "-q"]) == 0
+    calls = {"n": 0}
+    real = renderer.Renderer.render
+
+    def counting(self, vertices=None):
+        calls["n"] += 1
+        return real(self, vertices)
+
+    monkeypatch.setattr(renderer.Renderer, "render", counting)
+    assert main(["speak", "short.txt", "--size", "32", "--frames", "fr", "--resume", "-o", "v.mp4"]) == 0
+    assert calls["n"] == 0 and f"{N_SHORT} kept" in capsys.readouterr().out
+    assert export.read_video_info(short / "v.mp4")["n_frames"] == N_SHORT
+    assert not (short / "fr.partial").exists() and len(list((short / "fr").glob("*.png"))) == N_SHORT
+
+
 @pytest.mark.parametrize("content, audio, message", [
     ("0.0 0.2 _\n0.2 0.4 qq\n", None, "short.txt:2"),                 # unknown phone
     ("0.0 0.3 _\n0.2 0.4 m\n0.4 0.5 _\n", None, "short.txt:"),           # overlapping times

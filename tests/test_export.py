@@ -6,6 +6,9 @@ import struct
 import numpy as np
 import pytest
 import soundfile as sf
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
 
 from visemeface.errors import InputError
 from visemeface.render import export
@@ -57,6 +60,30 @@ def test_pc2_float64_input_is_stored_as_float32(tmp_path):
     export.write_pc2(tmp_path / "b.pc2", frames)
     pts, _ = export.read_pc2(tmp_path / "b.pc2")
     np.testing.assert_allclose(pts, frames, rtol=1e-7)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(arrays(np.float32, st.tuples(st.integers(1, 4), st.integers(1, 6), st.just(3)),
+              elements=st.floats(-1e6, 1e6, width=32)),
+       st.floats(-100, 100, width=32), st.floats(0.125, 10, width=32))
+def test_pc2_round_trip_property(tmp_path, frames, start, rate):
+    path = tmp_path / "p.pc2"
+    export.write_pc2(path, frames, start_frame=start, sample_rate=rate, force=True)
+    pts, head = export.read_pc2(path)
+    np.testing.assert_array_equal(pts, frames)
+    assert (head["start_frame"], head["sample_rate"]) == (start, rate)
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.binary(max_size=80), st.booleans())
+def test_read_pc2_never_crashes(tmp_path, data, magic):
+    path = tmp_path / "r.pc2"
+    path.write_bytes((export.PC2_MAGIC if magic else b"") + data)
+    try:
+        pts, head = export.read_pc2(path)
+    except InputError:
+        return
+    assert pts.shape == (head["num_samples"], head["num_points"], 3)
 
 
 def test_pc2_rejects_bad_files(tmp_path):
