@@ -564,6 +564,12 @@ def default_face(resolution: int | None = None, rest_gap: float = 0.0) -> FaceMe
     g = g + np.clip(nostril_w, 0, 1)[:, None] * (_NOSTRIL - g)
     g = g * (1 - 0.16 * crease)[:, None]
     g = g + hair_w[:, None] * (_HAIR - g)
+    # the mask fades toward its rim (behind the ears, over the crown, down the neck) so the cut
+    # edges do not read as part of the face
+    psi = np.abs(Xv) / _A(np.clip(Yv, -0.10, 0.21))
+    rim = np.clip(np.maximum.reduce([(psi - 1.15) / 0.55, (Yv - 0.150) / 0.035,
+                                     (-0.060 - Yv) / 0.025]), 0, 1)
+    g = g * (1 - 0.6 * _smoothstep(rim))[:, None]
     colours[:n_grid] = g
     # the inner lip line: a darker vermilion along the seam (shows as the closed-lip line)
     colours[seam_up[1:-1]] *= 0.62
