@@ -27,7 +27,7 @@ from __future__ import annotations
 import json
 import re
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import cv2
@@ -41,7 +41,7 @@ VIDEO_SUFFIXES = {".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v"}
 IMAGE_SUFFIXES = {".png", ".jpg", ".jpeg"}
 
 
-@dataclass(frozen=True)
+@dataclass
 class FrameSource:
     """Frames of one video or image folder.
 
@@ -60,9 +60,18 @@ class FrameSource:
     size: tuple[int, int]
     n_frames: int | None
     files: tuple[Path, ...] = ()
+    # The decoder opened by open_frames (meta already read), used by the first
+    # frames() call: starting and stopping ffmpeg twice costs seconds.
+    _reader: Iterator | None = field(default=None, repr=False, compare=False)
+
+    def close(self) -> None:
+        """Stop a decoder that was opened but not read."""
+        if self._reader is not None:
+            self._reader.close()
+            self._reader = None
 
     def frames(self) -> Iterator[np.ndarray]:
-        """Yield RGB uint8 frames (H, W, 3) in order."""
+        """Yield RGB uint8 frames (H, W, 3) in order (a video is decoded once per call)."""
         if self.files:
             for f in self.files:
                 img = _read_image(f)
@@ -73,9 +82,11 @@ class FrameSource:
             return
         import imageio_ffmpeg
         w, h = self.size
-        gen = imageio_ffmpeg.read_frames(str(self.path), pix_fmt="rgb24")
+        gen, self._reader = self._reader, None
         try:
-            next(gen)
+            if gen is None:
+                gen = imageio_ffmpeg.read_frames(str(self.path), pix_fmt="rgb24")
+                next(gen)
             for buf in gen:
                 yield np.frombuffer(buf, np.uint8).reshape(h, w, 3)
         except (OSError, RuntimeError) as exc:
@@ -129,18 +140,17 @@ def open_frames(path: str | Path, fps: float | None = None) -> FrameSource:
     try:
         meta = next(gen)
     except (OSError, RuntimeError, StopIteration) as exc:
-        raise InputError(f"cannot read video: {_first_line(exc)}", path) from None
-    finally:
         gen.close()
+        raise InputError(f"cannot read video: {_first_line(exc)}", path) from None
     size = meta.get("size")
-    if not size or not all(size):
-        raise InputError("no video stream found", path)
     rate = float(fps or meta.get("fps") or 0)
-    if not rate > 0:
-        raise InputError("video has no frame rate; give --fps", path)
+    if not size or not all(size) or not rate > 0:
+        gen.close()
+        raise InputError("no video stream found" if not size or not all(size)
+                         else "video has no frame rate; give --fps", path)
     duration = meta.get("duration")
-    n = int(round(duration * rate)) if duration else None
-    return FrameSource(path, rate, (int(size[0]), int(size[1])), n)
+    n = int(round(duration * float(meta.get("fps") or rate))) if duration else None
+    return FrameSource(path, rate, (int(size[0]), int(size[1])), n, _reader=gen)
 
 
 def parse_box(text: str) -> MouthBox:

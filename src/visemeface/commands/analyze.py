@@ -84,10 +84,14 @@ def run(args) -> int:
     if fps is None and sidecar is not None and Path(args.input).is_dir():
         fps = sidecar.fps
     source = open_frames(args.input, fps)
-    if sidecar is not None and args.box is None and sidecar.size and tuple(sidecar.size) != source.size:
-        raise InputError(f"sidecar is for {sidecar.size[0]}x{sidecar.size[1]} frames, the video is "
-                         f"{source.size[0]}x{source.size[1]}", side_file)
-    box.check_inside(*source.size)
+    try:
+        if sidecar is not None and args.box is None and sidecar.size and tuple(sidecar.size) != source.size:
+            raise InputError(f"sidecar is for {sidecar.size[0]}x{sidecar.size[1]} frames, the video is "
+                             f"{source.size[0]}x{source.size[1]}", side_file)
+        box.check_inside(*source.size)
+    except InputError:
+        source.close()
+        raise
 
     # The overlay shows the mouth box with a margin, like seed 001 Figs. 7-15.
     mx, my = box.w // 4, box.h // 2
