@@ -166,3 +166,13 @@ def test_bad_json_names_the_line(tmp_path, small_face):
     with pytest.raises(InputError) as exc:
         load_face(tmp_path / "f.ply")
     assert exc.value.line == 4
+
+
+def test_colours_from_regions_when_the_mesh_has_none():
+    v, q = _quad_sphere(8, 5)
+    face = FaceMesh(v, q, regions={"lower_lip": [0, 1], "mouth_cavity": [2, 3], "eyes": [4]})
+    c = face.vertex_colors()
+    lum = c @ np.array([0.299, 0.587, 0.114])
+    assert lum[[2, 3]].max() < 0.1                      # dark cavity
+    assert c[0, 0] / c[0, 1] > 1.2 * c[10, 0] / c[10, 1]  # lips redder than skin
+    assert lum[4] > lum[10]                            # pale eye

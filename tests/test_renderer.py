@@ -86,10 +86,12 @@ def test_landmarks_project_onto_the_face(face, front):
 
 
 def test_repeated_renders_identical(face, front):
+    buffers = (front.vbo.glo, front.ibo.glo, front.cbo.glo)
     a = front.render()
     front.render(_opened(face))
     b = front.render()
     assert np.array_equal(a, b)
+    assert (front.vbo.glo, front.ibo.glo, front.cbo.glo) == buffers   # rewritten, never rebuilt
     with Renderer(face, size=SIZE, view="face") as other:
         assert np.array_equal(other.render(), a)
 
