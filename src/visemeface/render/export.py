@@ -32,7 +32,18 @@ PC2
     The header is written first with ``num_samples = 0`` and patched when the
     writer closes, so frames stream to disk.
 glTF binary (.glb)
-    See :func:`write_morph_animation_glb`.
+    See :func:`write_morph_animation_glb`. Checked with the Khronos glTF
+    validator (no errors, warnings or infos) and played with three.js's
+    GLTFLoader + AnimationMixer (poses equal the rig's within 7 µm).
+
+Using the exports
+-----------------
+Blender: *File > Import > glTF 2.0* gives the face with one shape key per
+morph target and the speech as a shape-key action (set the scene's frame rate
+to the export's). For the PC2 cache, import ``frame_000000.obj`` (the vertex
+order is kept), add a *Mesh Cache* modifier (format PC2) and set its axes to
+the importer's: the cache holds visemeface's raw +y-up coordinates. three.js:
+``GLTFLoader`` then ``new AnimationMixer(gltf.scene).clipAction(gltf.animations[0]).play()``.
 """
 
 from __future__ import annotations
