@@ -89,3 +89,17 @@ def test_sheet_bad_input_exits_2_with_one_line(tmp_path, capsys, args, message):
     err = capsys.readouterr().err.strip()
     assert message in err and "\n" not in err
     assert not out.exists()
+
+
+def test_sheet_keep_contact_closes_bilabials_under_a_jaw_dropping_emotion(tmp_path):
+    from PIL import Image
+
+    idx = DECTALK.index("p")
+    r, c = divmod(idx, 8)
+    tiles = {}
+    for flag in ([], ["--keep-contact"]):
+        out = tmp_path / f"s{len(flag)}.png"
+        assert main(["sheet", "-o", str(out), "--size", "48", "--emotion", "surprise=0.8", *flag]) == 0
+        img = np.asarray(Image.open(out).convert("RGB"))
+        tiles[bool(flag)] = img[r * 62:r * 62 + 48, c * 48:(c + 1) * 48]
+    assert _dark_fraction(tiles[False]) > _dark_fraction(tiles[True]) + 0.01

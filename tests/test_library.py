@@ -258,3 +258,22 @@ def test_viseme_table_is_up_to_date_with_targets_and_rig(rig, visemes):
         if worst > 0.01:
             stale.append(f"{row['symbol']} ({worst:.3f})")
     assert not stale, "visemes.csv is stale, rerun scripts/fit_visemes.py --force: " + ", ".join(stale)
+
+
+def test_keep_contact_closes_a_surprised_bilabial_with_the_jaw_only(rig):
+    from visemeface.muscles.measure import LipGauge
+
+    g = LipGauge(rig.face)
+    plain = lib.blend("m", {"surprise": 1.0}, rig=rig)
+    kept = lib.blend("m", {"surprise": 1.0}, rig=rig, keep_contact=True)
+    assert not g.measure(rig.pose(plain.to_numpy()))["lips_closed"]  # seed 002's linear blend opens the lips
+    assert g.measure(rig.pose(kept.to_numpy()))["lips_closed"]
+    assert g.changes(rig.pose(kept.to_numpy()))["opening_height"] <= g.changes(lib.posed_vertices(rig, "m"))["opening_height"] + 1e-3
+    changed = plain.index[plain.to_numpy() != kept.to_numpy()].tolist()
+    assert changed == ["jaw"] and kept["jaw"] < plain["jaw"]
+    # postures without lip contact, or without an emotion, are the plain blend
+    pd.testing.assert_series_equal(lib.blend("aa", {"surprise": 1.0}, rig=rig, keep_contact=True),
+                                   lib.blend("aa", {"surprise": 1.0}, rig=rig))
+    pd.testing.assert_series_equal(lib.blend("p", {}, rig=rig, keep_contact=True), lib.blend("p", {}, rig=rig))
+    np.testing.assert_allclose(lib.posed_vertices(rig, "m", {"surprise": 1.0}, keep_contact=True),
+                               rig.pose(kept.to_numpy()))

@@ -17,7 +17,8 @@ def register(subparsers) -> None:
         "on the default face and tile the pictures, each labelled, into one PNG.",
         epilog="examples:\n  visemeface sheet -o visemes.png\n"
         "  visemeface sheet --emotions -o emotions.png --view face\n"
-        "  visemeface sheet --emotion happiness=0.5 -o happy_visemes.png",
+        "  visemeface sheet --emotion happiness=0.5 -o happy_visemes.png\n"
+        "  visemeface sheet --emotion surprise=0.6 --keep-contact -o surprised_visemes.png",
         formatter_class=__import__("argparse").RawDescriptionHelpFormatter,
     )
     p.add_argument("-o", "--output", required=True, help="PNG file to write")
@@ -25,6 +26,8 @@ def register(subparsers) -> None:
                    help="tile the emotions (and the neutral face) instead of the visemes")
     p.add_argument("--emotion", action="append", metavar="NAME[=W]", default=None,
                    help="blend every viseme with this emotion at weight W (default 1); repeatable")
+    p.add_argument("--keep-contact", action="store_true",
+                   help="with --emotion: close the jaw of p b m f v so the lips still touch")
     p.add_argument("--size", type=int, default=192, help="side of each tile in pixels, multiple of 16 "
                    "(default 192)")
     p.add_argument("--view", choices=VIEWS, default=None,
@@ -98,10 +101,11 @@ def run(args) -> int:
         poses = [(s, mix) for s in table.index]
         labels = [f"{i} {s}" for i, s in enumerate(table.index)]
         view, columns = args.view or "mouth", args.columns or 8
+    keep = bool(args.keep_contact)
     # fail on a bad name before rendering anything
     posed_vertices(rig, *poses[-1])
     renderer = Renderer(rig.face, size=(args.size, args.size), view=view)
-    images = [renderer.render(posed_vertices(rig, v, e))
+    images = [renderer.render(posed_vertices(rig, v, e, keep_contact=keep))
               for v, e in progress(poses, desc="rendering", unit="posture")]
     sheet = compose_sheet(images, labels, columns)
     with atomic_output(args.output, args.force) as tmp:

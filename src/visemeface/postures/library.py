@@ -40,7 +40,7 @@ from visemeface.muscles.rig import SPEECH_FUNCTIONS  # seed 002 Table 1, re-expo
 from visemeface.resources import data_path
 
 __all__ = [
-    "EMOTIONS", "SPEECH_FUNCTIONS", "TARGET_DIMENSIONS", "blend", "expression_info", "expressions_file",
+    "EMOTIONS", "SPEECH_FUNCTIONS", "TARGET_DIMENSIONS", "blend", "expression_info", "keep_lip_contact", "expressions_file",
     "load_expressions", "load_targets", "load_visemes", "parse_weights", "posed_vertices", "targets_file",
     "viseme_info", "visemes_file",
 ]
@@ -349,7 +349,8 @@ def parse_weights(specs: Iterable[str] | str | None) -> dict[str, float]:
 
 
 def blend(viseme: str, emotions: Mapping[str, float] | None = None, w_viseme: float = 1.0, rig=None,
-          *, visemes: pd.DataFrame | None = None, expressions: pd.DataFrame | None = None) -> pd.Series:
+          *, visemes: pd.DataFrame | None = None, expressions: pd.DataFrame | None = None,
+          keep_contact: bool = False) -> pd.Series:
     """Expressive speech posture by weighted parameter blending (seed 002 §2.2.1).
 
     .. math::
@@ -368,6 +369,11 @@ def blend(viseme: str, emotions: Mapping[str, float] | None = None, w_viseme: fl
         Gives the function names and ranges (default rig if None).
     visemes, expressions : DataFrame, optional
         Tables to use instead of the shipped ones (as returned by the loaders).
+    keep_contact : bool
+        For postures whose articulation needs lip contact (bilabials p b m,
+        labiodentals f v), close the jaw after blending until the lip opening is
+        back to the viseme's own (:func:`keep_lip_contact`): a surprised /m/
+        still closes. Off by default (the seed's plain arithmetic).
 
     Returns
     -------
@@ -404,11 +410,85 @@ def blend(viseme: str, emotions: Mapping[str, float] | None = None, w_viseme: fl
             raise InputError(f"unknown emotion {name!r}{close_matches(name, expressions.index)}")
         total = total + _weight(name, w) * expressions.loc[name].reindex(list(names), fill_value=0.0).to_numpy(dtype=float)
     clamped = np.clip(total, ranges[:, 0], ranges[:, 1])
-    return pd.Series(clamped, index=pd.Index(names, name="function"), name=viseme)
+    out = pd.Series(clamped, index=pd.Index(names, name="function"), name=viseme)
+    if keep_contact and viseme in _contact_postures() and emotions and w_v > 0:
+        alone = np.clip(w_v * visemes.loc[viseme].reindex(list(names), fill_value=0.0).to_numpy(dtype=float),
+                        ranges[:, 0], ranges[:, 1])
+        out = keep_lip_contact(rig, out, _opening(rig, alone))
+    return out
+
+
+def _contact_postures() -> tuple[str, ...]:
+    from visemeface.postures.phonemes import CLOSURE, LABIODENTAL
+
+    return tuple(CLOSURE) + tuple(LABIODENTAL)
+
+
+def _gauge(rig):
+    from visemeface.muscles.measure import LipGauge
+
+    g = getattr(rig, "_library_lip_gauge", None)
+    if g is None:
+        g = LipGauge(rig.face)
+        try:
+            object.__setattr__(rig, "_library_lip_gauge", g)
+        except (AttributeError, TypeError):
+            pass
+    return g
+
+
+def _opening(rig, a) -> float:
+    return float(_gauge(rig).changes(rig.pose(np.asarray(a, dtype=float)))["opening_height"])
+
+
+def keep_lip_contact(rig, activations: pd.Series, opening: float, tol: float = 1e-4) -> pd.Series:
+    r"""Close the jaw until the lip opening is at most ``opening``.
+
+    The lip opening :math:`h(j)` (change from rest, in rest mouth widths) grows
+    monotonically with the jaw activation :math:`j`, so bisection on
+    :math:`j \in [j_{min}, j_0]` finds the largest jaw with :math:`h(j) \le`
+    ``opening``; every other activation is kept. If even the closed jaw
+    :math:`j_{min}` leaves the lips further apart (an emotion lifting the upper
+    lip), the jaw stays at :math:`j_{min}`.
+
+    Parameters
+    ----------
+    rig : MuscleRig
+    activations : Series
+        Activations indexed by ``rig.names``.
+    opening : float
+        Largest lip opening allowed (e.g. the bare viseme's).
+    tol : float
+        Bisection stops when the jaw interval is shorter than this.
+
+    Returns
+    -------
+    Series
+        A copy of ``activations`` with the ``jaw`` entry lowered where needed.
+    """
+    a = activations.astype(float).copy()
+    j = rig.names.index("jaw")
+    lo, hi = float(rig.ranges[j, 0]), float(a.iloc[j])
+
+    def h(jaw):
+        b = a.to_numpy().copy()
+        b[j] = jaw
+        return _opening(rig, b)
+
+    if h(hi) <= opening + 1e-9:
+        return a
+    if h(lo) > opening:
+        a.iloc[j] = lo
+        return a
+    while hi - lo > tol:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if h(mid) <= opening else (lo, mid)
+    a.iloc[j] = lo
+    return a
 
 
 def posed_vertices(rig, viseme: str, emotions: Mapping[str, float] | None = None,
-                   w_viseme: float = 1.0) -> np.ndarray:
-    """The rig's face posed at ``blend(viseme, emotions, w_viseme)``: (N, 3) vertices."""
-    a = blend(viseme, emotions, w_viseme, rig=rig)
+                   w_viseme: float = 1.0, keep_contact: bool = False) -> np.ndarray:
+    """The rig's face posed at ``blend(viseme, emotions, w_viseme, keep_contact=...)``: (N, 3) vertices."""
+    a = blend(viseme, emotions, w_viseme, rig=rig, keep_contact=keep_contact)
     return np.asarray(rig.pose(a.to_numpy()))
