@@ -381,3 +381,19 @@ def test_numba_cache_folder_falls_back_when_the_package_is_read_only(monkeypatch
     tled._ensure_numba_cache_dir()
     assert os.environ["NUMBA_CACHE_DIR"] == str(tmp_path / "visemeface" / "numba")
     assert (tmp_path / "visemeface" / "numba").is_dir() and cfg.CACHE_DIR == os.environ["NUMBA_CACHE_DIR"]
+
+
+def test_a_run_restarted_from_a_frame_continues_the_motion():
+    """Displacement + velocity of a frame restart the run: the restarted path follows the
+    uninterrupted one to second order in dt (the Taylor start)."""
+    m = box_mesh((4, 1, 1), (0.02, 0.005, 0.005))
+    u0 = np.zeros((m.n_nodes, 3))
+    u0[:, 1] = 1e-4 * (m.nodes[:, 0] / 0.02) ** 2
+    make = lambda: TLEDSolver(m, SOFT_TISSUE, dt=1e-5, damping=10.0, fixed=m.node_sets["xmin"])
+    full = {f.step: f for f in make().run(2000, output_every=1000, initial_displacement=u0)}
+    mid = full[1000]
+    assert np.abs(mid.velocity).max() > 1e-4
+    resumed = list(make().run(1000, output_every=1000, initial_displacement=mid.displacement,
+                              initial_velocity=mid.velocity))[-1]
+    amplitude = np.abs(full[2000].displacement).max()
+    assert np.abs(resumed.displacement - full[2000].displacement).max() < 2e-3 * amplitude
