@@ -120,6 +120,8 @@ def test_bad_inputs_exit_2_with_one_line(tmp_path, capsys, frame_dir):
     assert "no mouth box" in _error(capsys, "analyze", frame_dir, "-o", out)
     assert "no such file" in _error(capsys, "analyze", tmp_path / "none.mp4", "--box", BOX, "-o", out)
     assert "--threshold" in _error(capsys, "analyze", frame_dir, "--box", BOX, "-o", out, "--threshold", "dark")
+    assert "--pad" in _error(capsys, "analyze", frame_dir, "--box", BOX, "-o", out, "--pad", "a,b")
+    assert "pad must be" in _error(capsys, "analyze", frame_dir, "--box", BOX, "-o", out, "--pad", "0,1")
     side = tmp_path / "side.json"
     side.write_text('{"mouth_box": [1, 2, 3]}')
     assert "side.json" in _error(capsys, "analyze", frame_dir, "--box-json", side, "-o", out)

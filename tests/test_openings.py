@@ -155,3 +155,34 @@ def test_bad_box_values(box):
 def test_bad_settings(bad):
     with pytest.raises(InputError):
         OpeningDetector(**bad)
+
+
+def test_pad_keeps_a_dropped_jaw_in_view():
+    """A box on the rest lips (as the renderer writes it) must not cut off an opening jaw."""
+    box = (56, 156, 400, 100)                               # bottom edge at y = 256
+    e = Ellipse(256, 236, 70, 40)                           # reaches down to y = 276
+    img = mouth_image(SIZE, BOX, [e], seed=9)
+    full = detect_openings(img, box)
+    cut = detect_openings(img, box, pad=0)
+    assert abs(full.largest_height * W - 2 * e.b) <= 2
+    assert full.largest_area * W * W == pytest.approx(e.area, rel=0.03)
+    assert cut.largest_height * W <= 256 - 196 + 1          # only the rows inside the box
+    with pytest.raises(InputError, match="pad"):
+        OpeningDetector(pad=(0.1, -1, 0, 0))
+
+
+def test_rendered_face_closed_then_opening():
+    """The project's own renderer: a closed mouth has no opening; the jaw opens one that grows."""
+    try:
+        from visemeface.muscles.rig import default_rig
+        from visemeface.render.renderer import Renderer
+        rig = default_rig()
+        renderer = Renderer(rig.face, size=(256, 256), view="mouth")
+    except ImportError as exc:          # renderer not importable in this checkout
+        pytest.skip(f"renderer unavailable: {exc}")
+    box = renderer.mouth_box()
+    found = [detect_openings(renderer.render(rig.pose({"jaw": j})), box) for j in (0.0, 0.5, 1.0)]
+    assert [f.count for f in found] == [0, 1, 1]
+    assert 0 < found[1].largest_height < found[2].largest_height
+    assert 0 < found[1].largest_area < found[2].largest_area
+    assert found[2].largest_width > 0.6                     # the opening spans most of the mouth

@@ -1,9 +1,13 @@
 """Per-frame mouth-opening detection (seed 001 §4).
 
-A frame is cropped to the *mouth box* ``(x, y, w, h)`` -- pixel coordinates,
-origin top-left, x to the right, y down; its left and right edges lie on the
-mouth corners, so ``w`` is the natural mouth width that normalises every
-metric. Inside the box:
+The *mouth box* ``(x, y, w, h)`` is in pixel coordinates, origin top-left,
+x to the right, y down; its left and right edges lie on the mouth corners at
+rest, so ``w`` is the natural mouth width that normalises every metric. The
+frame is cropped to the box grown by ``pad`` (fractions of ``w``: left, top,
+right, bottom; default ``0.1, 0.1, 0.1, 0.4``, clipped to the frame) because
+a box drawn on the rest lips -- as the renderer writes it -- would cut off a
+jaw-opened mouth; ``pad=0`` analyses exactly the box, as seed 001 does.
+Inside that region:
 
 1. Rec.601 luma, :math:`Y = 0.299 r + 0.587 g + 0.114 b`.
 2. Median blur with an odd kernel scaled to the mouth width,
@@ -81,10 +85,12 @@ class MouthBox:
                 f"mouth box {self.x},{self.y},{self.w},{self.h} (x,y,w,h) is outside the "
                 f"{width}x{height} frame")
 
-    def crop(self, frame: np.ndarray) -> np.ndarray:
-        """View of ``frame`` inside the box (after :meth:`check_inside`)."""
-        self.check_inside(frame.shape[1], frame.shape[0])
-        return frame[self.y:self.y + self.h, self.x:self.x + self.w]
+    def region(self, pad, width: int, height: int) -> tuple[int, int, int, int]:
+        """``(x0, y0, x1, y1)`` of the box grown by ``pad`` (left, top, right, bottom) x ``w``, clipped."""
+        self.check_inside(width, height)
+        left, top, right, bottom = (float(p) * self.w for p in pad)
+        return (max(0, int(round(self.x - left))), max(0, int(round(self.y - top))),
+                min(width, int(round(self.x + self.w + right))), min(height, int(round(self.y + self.h + bottom))))
 
 
 @dataclass(frozen=True)
@@ -237,6 +243,8 @@ class OpeningDetector:
         :func:`otsu_threshold`).
     teeth_saturation, teeth_value : int
         HSV limits of :func:`teeth_mask`.
+    pad : float or (left, top, right, bottom)
+        Margins around the box that are analysed too, in units of ``w``.
     """
 
     threshold: str | float = "otsu"
@@ -247,6 +255,7 @@ class OpeningDetector:
     max_dark_ratio: float = 0.5
     teeth_saturation: int = 60
     teeth_value: int = 150
+    pad: tuple = (0.1, 0.1, 0.1, 0.4)
 
     def __post_init__(self):
         if isinstance(self.threshold, str):
@@ -256,10 +265,15 @@ class OpeningDetector:
             raise InputError(f"threshold must be in 0..255, got {self.threshold!r}")
         if not (0 <= self.min_area < 1):
             raise InputError(f"min_area must be in [0, 1) (fraction of mouth width squared), got {self.min_area}")
+        pad = np.atleast_1d(np.asarray(self.pad, dtype=float))
+        if pad.size == 1:
+            pad = np.repeat(pad, 4)
+        if pad.size != 4 or not np.all(np.isfinite(pad)) or np.any(pad < 0):
+            raise InputError(f"pad must be 1 or 4 numbers >= 0 (left, top, right, bottom), got {self.pad!r}")
+        object.__setattr__(self, "pad", tuple(float(v) for v in pad))
 
-    def opening_mask(self, crop: np.ndarray) -> tuple[np.ndarray, float | None]:
-        """uint8 mask (255 = opening) of an RGB crop, and the threshold used."""
-        w = crop.shape[1]
+    def opening_mask(self, crop: np.ndarray, w: int) -> tuple[np.ndarray, float | None]:
+        """uint8 mask (255 = opening) of an RGB crop of a mouth ``w`` px wide, and the threshold used."""
         grey = cv2.medianBlur(rec601_grey(crop), median_kernel(w))
         if self.threshold == "otsu":
             hist = np.bincount(grey.ravel(), minlength=256)
@@ -290,9 +304,9 @@ class OpeningDetector:
             Largest first; ``count == 0`` when nothing is found.
         """
         box = MouthBox.of(box)
-        crop = box.crop(frame)
-        mask, t = self.opening_mask(crop)
+        x0, y0, x1, y1 = box.region(self.pad, frame.shape[1], frame.shape[0])
         w = box.w
+        mask, t = self.opening_mask(frame[y0:y1, x0:x1], w)
         empty = np.zeros(0)
         if t is None or not mask.any():
             return Openings(empty, empty, empty, (), w, t)
@@ -315,7 +329,7 @@ class OpeningDetector:
             # 1 px wide, and a digitised ellipse of semi-axis a measures ~2a.
             widths.append(bw)
             heights.append(bh)
-            outlines.append(c + np.array([box.x, box.y], np.int32))
+            outlines.append(c + np.array([x0, y0], np.int32))
         if not areas:
             return Openings(empty, empty, empty, (), w, t)
         order = np.argsort(-np.asarray(areas), kind="stable")

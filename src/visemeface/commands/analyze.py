@@ -33,6 +33,9 @@ def register(subparsers) -> None:
                    help="count bright unsaturated pixels (teeth) touching the opening as opening")
     p.add_argument("--min-area", type=float, default=5e-4, metavar="F",
                    help="drop openings smaller than F * mouth_width^2 pixels (default 5e-4)")
+    p.add_argument("--pad", default="0.1,0.1,0.1,0.4", metavar="F|L,T,R,B",
+                   help="also analyse this margin around the box, in mouth widths (left,top,right,bottom; "
+                   "default 0.1,0.1,0.1,0.4: room for the jaw to drop); 0 = exactly the box")
     p.add_argument("--plot", metavar="PNG", help="also plot the profile over time")
     p.add_argument("--overlay", metavar="DIR", help="write every frame's mouth region with the detected outlines")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
@@ -51,6 +54,16 @@ def _threshold(text: str):
     return value
 
 
+def _pad(text: str):
+    from visemeface.errors import InputError
+
+    try:
+        vals = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        raise InputError(f"--pad must be 1 or 4 numbers (left,top,right,bottom), got {text!r}") from None
+    return vals
+
+
 def run(args) -> int:
     import contextlib
     from pathlib import Path
@@ -64,7 +77,7 @@ def run(args) -> int:
     from visemeface.outputs import atomic_dir, check_new, progress
 
     detector = OpeningDetector(threshold=_threshold(args.threshold), hull=args.hull, teeth=args.teeth,
-                               min_area=args.min_area)
+                               min_area=args.min_area, pad=_pad(args.pad))
     side_file = Path(args.box_json) if args.box_json else sidecar_path(args.input)
     sidecar = read_sidecar(side_file) if side_file else None
     if args.box is not None:
@@ -94,9 +107,7 @@ def run(args) -> int:
         raise
 
     # The overlay shows the mouth box with a margin, like seed 001 Figs. 7-15.
-    mx, my = box.w // 4, box.h // 2
-    x0, y0 = max(0, box.x - mx), max(0, box.y - my)
-    x1, y1 = min(source.size[0], box.x + box.w + mx), min(source.size[1], box.y + box.h + my)
+    x0, y0, x1, y1 = box.region([max(p, 0.15) for p in detector.pad], *source.size)
 
     with contextlib.ExitStack() as stack:
         on_frame = None
