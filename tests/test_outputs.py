@@ -39,3 +39,15 @@ def test_atomic_dir(tmp_path):
     with pytest.raises(InputError):
         with atomic_dir(target):
             pass
+
+
+def test_atomic_output_mode_follows_umask(tmp_path):
+    import os
+
+    old = os.umask(0o022)
+    try:
+        with atomic_output(tmp_path / "a.png") as tmp:
+            tmp.write_bytes(b"x")
+    finally:
+        os.umask(old)
+    assert (tmp_path / "a.png").stat().st_mode & 0o777 == 0o644

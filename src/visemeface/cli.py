@@ -56,6 +56,13 @@ def main(argv: list[str] | None = None) -> int:
     except VisemefaceError as exc:
         print(f"visemeface: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        # Output piped into `head` and the like: stop quietly, as Unix tools do.
+        import os
+
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 0
     except KeyboardInterrupt:
         print("visemeface: interrupted", file=sys.stderr)
         return 130
