@@ -12,6 +12,10 @@ Prints JSON lines:
   dt = 1e-5 s on the seed-size mesh, extrapolated from a timed run of ``--steps`` steps
   (``"extrapolated": true``).
 
+With one thread the solver's serial kernels run (``parallel=False``); with more, the
+``prange`` kernels after ``numba.set_num_threads``. Each figure is the best of five
+blocks of steps, since other processes on a shared machine only ever slow a block down.
+
 Meshes: ``seed`` = a 58 × 59 quad sheet (10 cm × 10 cm, bowed like a face) extruded one
 layer deep: 3,422 hex and 7,080 nodes, the size of seed 000's face model (3,414 hex, 6,982
 nodes); ``box64k`` = a 40 × 40 × 40 box (64,000 hex, 68,921 nodes).

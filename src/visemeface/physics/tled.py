@@ -674,8 +674,9 @@ class TLEDSolver:
     # -- kernels ------------------------------------------------------------
 
     def _element_forces(self, u: np.ndarray, want_energy: bool) -> None:
-        self._elem_kernel(u, self.conn, self.dhdx, self.volume, self.gamma, self.hourglass_stiffness, self.mu, self.K,
-             self._fe, self._jac, self._fdef, self.element_hook is not None, self._energy, want_energy)
+        self._elem_kernel(u, self.conn, self.dhdx, self.volume, self.gamma, self.hourglass_stiffness,
+                          self.mu, self.K, self._fe, self._jac, self._fdef, self.element_hook is not None,
+                          self._energy, want_energy)
 
     def internal_forces(self, u: np.ndarray) -> np.ndarray:
         """Assembled internal nodal forces F(u) (n, 3) (N), hook not applied."""
