@@ -123,3 +123,11 @@ def test_plot_writes_a_png(tmp_path, merging):
     assert ((rgb.max(axis=2) - rgb.min(axis=2)) > 0.4).sum() > 2000
     with pytest.raises(InputError, match="unknown metric"):
         plot_profiles({"a": merging}, tmp_path / "x.png", metrics=["speed"])
+
+
+@pytest.mark.parametrize("module", ["visemeface.analysis", "visemeface.analysis.openings"])
+def test_docstring_examples_run(module):
+    import doctest
+    import importlib
+    result = doctest.testmod(importlib.import_module(module))
+    assert result.attempted > 0 and result.failed == 0

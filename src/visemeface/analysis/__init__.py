@@ -1,1 +1,25 @@
-"""visemeface.analysis"""
+"""Mouth-opening evaluation (seed 001 §4): how a mouth opens, frame by frame.
+
+- :mod:`~visemeface.analysis.openings`: per-frame detection (Rec.601 grey,
+  median blur, dark threshold, top-level contours, optional convex hull and
+  teeth handling) and seed 001's metrics -- the number of openings and each
+  opening's area, width and height, normalised by the natural mouth width.
+- :mod:`~visemeface.analysis.profiles`: those metrics over time as a
+  DataFrame with frame-difference derivatives, the L2 distance between two
+  profiles (aligned by time), CSV I/O and plots.
+- :mod:`~visemeface.analysis.video`: frames from a video file or an image
+  folder, and the mouth-box sidecar JSON ``{"mouth_box": [x, y, w, h],
+  "fps": ..., "size": [w, h]}``.
+- :mod:`~visemeface.analysis.synthetic`: synthetic mouths with known
+  openings (ground truth for tests and benchmarks).
+
+Example
+-------
+>>> from visemeface.analysis.synthetic import merging_mouth_frames
+>>> from visemeface.analysis.profiles import analyze_frames
+>>> df = analyze_frames(merging_mouth_frames(8, 4), (28, 78, 200, 100), fps=30)
+>>> df["count"].tolist()          # two openings merge into one at frame 4
+[2, 2, 2, 2, 1, 1, 1, 1]
+>>> int(df["d_width"].abs().idxmax())
+4
+"""
