@@ -238,8 +238,8 @@ def _default_text():
 
 
 @pytest.mark.parametrize("old,new,field", [
-    ('zone_angle_deg = 28.0\nfalloff_start = 1.0\nfalloff_end = 1.5\nk = 0.13',
-     'zone_angle_deg = 200.0\nfalloff_start = 1.0\nfalloff_end = 1.5\nk = 0.13', "zone_angle_deg"),
+    ('zone_angle_deg = 28.0\nfalloff_start = 1.0\nfalloff_end = 1.5\nk = 0.19',
+     'zone_angle_deg = 200.0\nfalloff_start = 1.0\nfalloff_end = 1.5\nk = 0.19', "zone_angle_deg"),
     ('attachment = {at = "cheek_{side}", offset = [0.35, 0.15, -0.1]}',
      'attachment = {at = "cheeck_{side}", offset = [0.35, 0.15, -0.1]}', "attachment"),
     ('insertion = {at = "mouth_corner_{side}", offset = [0.06, 0.02, -0.02]}',
