@@ -31,6 +31,11 @@ def test_plan_outputs_refuses_existing_and_duplicates(tmp_path):
         pipeline.plan_outputs(pipeline.Outputs())
     with pytest.raises(InputError, match="folder does not exist"):
         pipeline.plan_outputs(pipeline.Outputs(pc2=tmp_path / "no" / "x.pc2"))
+    (tmp_path / "fr").mkdir()
+    with pytest.raises(InputError, match="fr: output exists"):
+        pipeline.plan_outputs(pipeline.Outputs(frames=tmp_path / "fr"))
+    pipeline.plan_outputs(pipeline.Outputs(frames=tmp_path / "fr", resume=True))
+    (tmp_path / "fr").rmdir()
     assert existing.read_bytes() == b"user"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.mp4"]
 

@@ -367,7 +367,7 @@ def plan_outputs(out: Outputs) -> None:
         if kind in paths and paths[kind].suffix.lower() != suffix:
             raise InputError(f"the {kind} output must end in {suffix}", paths[kind])
     for kind, p in paths.items():
-        if kind != "frames":
+        if kind != "frames" or not out.resume:  # --resume may reuse an existing frames folder
             check_new(p, out.force)
 
 
