@@ -74,7 +74,8 @@ def test_element_frames_are_right_handed_orthonormal():
 
 
 def _stretched(X, lam):
-    return X * np.array([1.0, lam, 1.0]) - X
+    u = X * np.array([1.0, lam, 1.0]) - X
+    return sv.deformation_gradient(u, sv.hex_centre_gradients(X))
 
 
 def test_saliva_breaks_at_Z_then_force_decays_geometrically():
@@ -167,3 +168,20 @@ def test_glue_file_layouts(tmp_path):
     p.write_text("s,glue\n0,0.1\n0.5,-2\n")
     with pytest.raises(InputError, match=r"glue.csv:3: glue must be >= 0"):
         sv.read_glue_file(p, np.zeros(3))
+
+
+def test_compiled_hook_follows_the_same_rule_as_update():
+    rng = np.random.default_rng(0)
+    X = np.concatenate([_box(), _box(), _box()])
+    glue = np.array([0.0, 0.08, 0.3])
+    a, b = sv.SalivaBreaking(X, glue), sv.SalivaBreaking(X, glue)
+    hook = b.hook(np.array([2, 0, 1]))                 # saliva at mesh ids 2, 0, 1
+    for step, lam in enumerate([1.0, 1.02, 1.05, 1.2, 1.1, 0.99, 1.03, 1.5]):
+        F = np.concatenate([_stretched(X[i:i + 1], lam + 0.01 * i) for i in range(3)])
+        f = rng.normal(size=(3, 8, 3))
+        want = a.update(step * 1e-5, F, f)
+        Fm, fm = np.zeros((3, 3, 3)), np.zeros((3, 8, 3))
+        Fm[[2, 0, 1]], fm[[2, 0, 1]] = F, f
+        hook(step, step * 1e-5, Fm, fm)
+        np.testing.assert_allclose(fm[[2, 0, 1]], want)
+        assert a.broken.tolist() == b.broken.tolist()

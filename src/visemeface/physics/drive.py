@@ -1,0 +1,447 @@
+"""Drive the FEM face from an ActivationTrack: muscle forces, jaw rotation, scenarios.
+
+The kinematic rig (:mod:`visemeface.muscles.rig`) says where every surface
+vertex goes for an activation vector **a**. The FEM face is driven so that,
+without saliva, its equilibrium *is* that posture:
+
+1. **Kinematic field.** U(**a**) on every FEM node: the rig's displacement on
+   the surface nodes; on the bone side, zero for the skull and the jaw's
+   rotation for the jaw nodes; linear through the tissue's depth in between.
+2. **Jaw.** The bone-side nodes are *prescribed* U(**a**): the rig's jaw
+   rotation with the jaw weight of the vertex above (zero on the skull, so
+   those stay put). The jaw is bone: it is moved, not pushed.
+3. **Muscle forces.** The external force on the free nodes is the internal
+   elastic force of the soft tissue held in that field,
+
+   .. math:: \\mathbf f(\\mathbf a) = \\mathbf F_{int}^{tissue}\\big(U(\\mathbf a)\\big),
+
+   i.e. the rig's Waters displacement fields turned into force fields through
+   the tissue's own (nonlinear, neo-Hookean) stiffness. With these loads and
+   boundary values the static balance F_int(u) = f holds at u = U(**a**), so
+   with no glue the damped dynamics settle on the kinematic posture; the
+   saliva (excluded from the calibration) only changes how the lips get there.
+
+Forces and prescribed displacements are computed at the track's frame times
+and linearly interpolated in between, per time step.
+
+Scenarios (:func:`scenario_track`) are small activation tracks for the seed's
+experiments (jaw lowered and raised, the mouth opened and closed twice).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from visemeface.errors import InputError, close_matches
+from visemeface.physics.face_model import seam_openings
+from visemeface.physics.saliva import GLUE, SalivaBreaking, SalivaParams, glue_per_element
+
+#: Seed 000/001 scenarios as (time s, value) keyframes of the jaw (and, for the
+#: one-sided variants, the lower-lip depressor of one side), eased with a smoothstep.
+SCENARIOS = {
+    # the mouth opened and closed twice (seed 001 Fig. 18: "closed and reopened twice")
+    "open": [(0.0, 0.0), (0.05, 0.0), (0.40, 1.0), (0.60, 1.0), (0.85, 0.0), (0.95, 0.0),
+             (1.30, 1.0), (1.50, 1.0), (1.75, 0.0), (1.80, 0.0)],
+    # a single opening held open (equilibrium with and without glue, seed 000 Fig. 8)
+    "open-once": [(0.0, 0.0), (0.05, 0.0), (0.40, 1.0), (0.75, 1.0)],
+    # a slight opening: sticky lips stay joined toward the corners (seed 000 Fig. 7)
+    "part": [(0.0, 0.0), (0.05, 0.0), (0.40, 0.45), (0.75, 0.45)],
+}
+SIDES = ("both", "left", "right")
+
+
+def smoothstep_keyframes(t, keys) -> np.ndarray:
+    """Value of keyframes ``[(t0, v0), (t1, v1), ...]`` at times ``t``.
+
+    Between keys the value eases with s = 3x² − 2x³ (zero slope at each key,
+    so the drive never jerks); it is held constant outside the keys.
+
+    Examples
+    --------
+    >>> smoothstep_keyframes([0.0, 0.5, 1.0, 2.0], [(0.0, 0.0), (1.0, 2.0)])
+    array([0., 1., 2., 2.])
+    """
+    k = np.asarray(keys, dtype=np.float64)
+    t = np.asarray(t, dtype=np.float64)
+    i = np.clip(np.searchsorted(k[:, 0], t, side="right") - 1, 0, len(k) - 2)
+    t0, t1 = k[i, 0], k[i + 1, 0]
+    x = np.clip((t - t0) / np.where(t1 > t0, t1 - t0, 1.0), 0.0, 1.0)
+    s = x * x * (3.0 - 2.0 * x)
+    return k[i, 1] + s * (k[i + 1, 1] - k[i, 1])
+
+
+def make_track(times, values: dict, names, fps: float) -> pd.DataFrame:
+    """An ActivationTrack (docs/conventions.md) with the given columns, zeros elsewhere."""
+    df = pd.DataFrame(0.0, index=pd.Index(np.asarray(times, float), name="time"), columns=list(names))
+    for k, v in values.items():
+        df[k] = v
+    df.attrs["fps"] = float(fps)
+    return df
+
+
+def scenario_track(name: str, names, fps: float = 60.0, jaw: float = 0.35, side: str = "both",
+                   lip: float = 0.6) -> pd.DataFrame:
+    """The activation track of a named scenario.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`SCENARIOS`.
+    names : sequence of str
+        Rig column names (``rig.names``); must include ``"jaw"``.
+    fps : float
+        Frame rate of the track.
+    jaw : float
+        Jaw activation at the keyframes' value 1.
+    side : {"both", "left", "right"}
+        ``left``/``right``: also pull the lower lip down on that side only
+        (``depressor_labii_inferioris_<side>`` at ``lip`` × the keyframe
+        value), an asymmetric opening (seed 000 Fig. 10).
+    lip : float
+        Activation of that one-sided depressor at value 1.
+    """
+    if name not in SCENARIOS:
+        raise InputError(f"unknown scenario {name!r}" + close_matches(name, SCENARIOS)
+                         + f"; known: {', '.join(SCENARIOS)}")
+    if side not in SIDES:
+        raise InputError(f"side must be one of {', '.join(SIDES)}, got {side!r}")
+    if fps <= 0:
+        raise InputError(f"fps must be > 0, got {fps}")
+    keys = SCENARIOS[name]
+    n = int(np.floor(keys[-1][0] * fps + 1e-9)) + 1
+    t = np.arange(n) / fps
+    v = smoothstep_keyframes(t, keys)
+    cols = {"jaw": jaw * v}
+    if side != "both":
+        cols[f"depressor_labii_inferioris_{side}"] = lip * v
+    for c in cols:
+        if c not in names:
+            raise InputError(f"the rig has no {c!r} column" + close_matches(c, names))
+    return make_track(t, cols, names, fps)
+
+
+def activation_at(values: np.ndarray, fps: float, t: float) -> np.ndarray:
+    """Linearly interpolated activation row of a (frames, M) track array at time ``t``."""
+    f = t * fps
+    i = int(np.clip(np.floor(f), 0, len(values) - 1))
+    j = min(i + 1, len(values) - 1)
+    w = float(np.clip(f - i, 0.0, 1.0))
+    return (1.0 - w) * values[i] + w * values[j]
+
+
+# --------------------------------------------------------------------------- kinematic field -> loads
+
+class FaceDrive:
+    """Loads on the FEM face for an activation track (see the module docstring).
+
+    Parameters
+    ----------
+    fem : FEMFace
+    rig : MuscleRig
+        On ``fem.face`` (its ``names`` are the track's columns).
+    values : (frames, M) array
+        Activations per frame, columns in ``rig.names`` order.
+    fps : float
+        Frame rate of ``values``.
+    tissue_forces : callable
+        ``u (n, 3) -> (n, 3)`` internal forces of the tissue elements alone.
+    """
+
+    def __init__(self, fem, rig, values, fps: float, tissue_forces):
+        self.fem, self.rig = fem, rig
+        self.values = np.asarray(values, dtype=np.float64)
+        self.fps = float(fps)
+        self.tissue_forces = tissue_forces
+        mesh = fem.mesh
+        S, L = fem.n_surface, fem.layers
+        # Every bone-side node is prescribed: it turns with the jaw by the rig's
+        # jaw weight of the vertex above it (zero on the skull), so bone and
+        # skin follow one smooth weight and the jaw line tears no element.
+        self.jaw_nodes = mesh.node_sets["inner"]
+        self._inner_rest = mesh.nodes[self.jaw_nodes]
+        self._inner_w = rig.jaw_weight[fem.surface_vertices[self.jaw_nodes - L * S]].copy()
+        self._jaw_col = list(rig.names).index("jaw")
+        self._cache: dict[int, tuple] = {}
+        #: Track time of the solver's t = 0 (non-zero when resuming).
+        self.offset = 0.0
+        self._i = None
+
+    @property
+    def n_frames(self) -> int:
+        return len(self.values)
+
+    def bone_displacement(self, jaw: float) -> np.ndarray:
+        """Displacement (S, 3) of the bone-side nodes at jaw activation ``jaw``.
+
+        The rig's jaw rotation (about the joint axis, angle = jaw · max angle ·
+        the rig's jaw weight of the vertex above each node) applied to each
+        node's own rest position; zero on the skull (fixed nodes).
+        """
+        from visemeface.muscles.functions import jaw_rotation_displacement
+        jl, jr = self.rig.jaw_joints
+        return jaw_rotation_displacement(self._inner_rest, jl, jr, jaw * self.rig.max_jaw_angle, self._inner_w)
+
+    def kinematic_field(self, a) -> np.ndarray:
+        """U(a) (n, 3): the rig's surface displacement, bone values, linear through the depth."""
+        fem = self.fem
+        surf = self.rig.displacement(a)[fem.surface_vertices]
+        bone = self.bone_displacement(float(np.asarray(a)[self._jaw_col]))
+        return np.concatenate([(1.0 - w) * surf + w * bone for w in fem.depth_fraction])
+
+    def keyframe(self, k: int):
+        """(external force (n, 3), jaw displacement (k, 3), U) at frame ``k`` (cached)."""
+        k = int(np.clip(k, 0, self.n_frames - 1))
+        if k not in self._cache:
+            if len(self._cache) > 4:
+                self._cache.pop(min(self._cache))
+            U = self.kinematic_field(self.values[k])
+            self._cache[k] = (self.tissue_forces(U), U[self.jaw_nodes], U)
+        return self._cache[k]
+
+    def _interval(self, t: float):
+        """Frame index i and weight w with t between frames i and i + 1 (cached loads)."""
+        f = (t + self.offset) * self.fps
+        i = int(f + 1e-9)
+        if i != self._i:
+            fa, ja, _ = self.keyframe(i)
+            fb, jb, _ = self.keyframe(i + 1)
+            self._i = i
+            self._seg = (fa, fb - fa, ja, jb - ja)
+            self._fbuf = np.empty_like(fa)
+            self._jbuf = np.empty_like(ja)
+        return min(max(f - i, 0.0), 1.0)
+
+    def force(self, t: float) -> np.ndarray:
+        """External nodal forces at time ``t``, linear between frames."""
+        w = self._interval(t)
+        fa, df = self._seg[0], self._seg[1]
+        np.multiply(df, w, out=self._fbuf)
+        self._fbuf += fa
+        return self._fbuf
+
+    def jaw(self, t: float) -> np.ndarray:
+        """Prescribed jaw-node displacements at time ``t``, linear between frames."""
+        w = self._interval(t)
+        ja, dj = self._seg[2], self._seg[3]
+        np.multiply(dj, w, out=self._jbuf)
+        self._jbuf += ja
+        return self._jbuf
+
+
+# --------------------------------------------------------------------------- the simulation
+
+PHYSICS = ("sticky", "elastic")
+
+
+@dataclass(frozen=True)
+class PhysicsSettings:
+    """Solver and saliva settings (seed 000/001 Table 1 defaults).
+
+    ``glue`` is the uniform glue strength K_glue; ``glue_profile`` a profile
+    string (:func:`visemeface.physics.saliva.parse_glue_profile`) applied over
+    it; ``glue_file`` a CSV (:func:`visemeface.physics.saliva.read_glue_file`).
+    """
+
+    dt: float = 1e-5
+    damping: float = 80.0
+    hourglass_kappa: float = 0.075
+    glue: float = GLUE
+    glue_profile: str | None = None
+    glue_file: str | None = None
+    saliva: SalivaParams = field(default_factory=SalivaParams)
+
+
+@dataclass
+class SimFrame:
+    """One output frame of :class:`StickySimulation`.
+
+    ``vertices`` are the face's vertices (FEM surface + kinematic rest of the
+    face), ``display`` the same with the rest gap drawn closed (to render),
+    ``displacement``/``velocity`` the FEM node state, ``saliva`` a dict of
+    per-frame saliva measures (see :meth:`StickySimulation.saliva_state`).
+    """
+
+    index: int
+    time: float
+    vertices: np.ndarray
+    display: np.ndarray
+    displacement: np.ndarray
+    velocity: np.ndarray
+    saliva: dict
+
+
+class StickySimulation:
+    """The FEM face with sticky (or elastic) lips driven by an ActivationTrack.
+
+    Parameters
+    ----------
+    fem : FEMFace
+    rig : MuscleRig
+        The rig on ``fem.face``.
+    track : DataFrame
+        ActivationTrack (docs/conventions.md): columns ``rig.names`` (missing
+        muscles count as 0), ``attrs["fps"]``.
+    physics : {"sticky", "elastic"}
+        ``elastic`` is the same FEM with no glue (K_glue = 0: saliva parts as
+        soon as it is stretched, still resists compression).
+    settings : PhysicsSettings
+
+    Notes
+    -----
+    The time step is the largest ``dt' ≤ settings.dt`` that divides a frame
+    (``1 / (fps · ceil(1 / (fps · dt)))``), so frames fall exactly on steps.
+    Everything is checked (dt against the stable limit, glue, moisture) when
+    the object is made, before any simulation time is spent.
+    """
+
+    def __init__(self, fem, rig, track: pd.DataFrame, physics: str = "sticky",
+                 settings: PhysicsSettings | None = None):
+        from visemeface.physics.hexmesh import HexMesh
+        from visemeface.physics.materials import SALIVA, SOFT_TISSUE
+        from visemeface.physics.tled import TLEDSolver
+
+        settings = settings or PhysicsSettings()
+        if physics not in PHYSICS:
+            raise InputError(f"unknown physics {physics!r}" + close_matches(physics, PHYSICS)
+                             + f"; use one of {', '.join(PHYSICS)}")
+        self.fem, self.rig, self.physics, self.settings = fem, rig, physics, settings
+        self.values, self.fps = track_values(track, rig.names)
+        if not (np.isfinite(settings.dt) and settings.dt > 0):
+            raise InputError(f"time step must be > 0, got {settings.dt}")
+        self.steps_per_frame = int(np.ceil(1.0 / (self.fps * settings.dt) - 1e-9))
+        self.dt = 1.0 / (self.fps * self.steps_per_frame)
+        if physics == "elastic":
+            glue = np.zeros(len(fem.saliva))
+        else:
+            glue = glue_per_element(fem.saliva_s, settings.glue, settings.glue_profile, settings.glue_file)
+        mesh = fem.mesh
+        X = mesh.nodes[mesh.hexes[fem.saliva]]
+        self.saliva = SalivaBreaking(X, glue, settings.saliva)
+        tissue_mesh = HexMesh(mesh.nodes, mesh.hexes[fem.tissue], material=np.zeros(len(fem.tissue), np.int64))
+        self._tissue = TLEDSolver(tissue_mesh, SOFT_TISSUE, dt=min(self.dt, settings.dt),
+                                  damping=settings.damping, hourglass_kappa=settings.hourglass_kappa)
+        self.drive = FaceDrive(fem, rig, self.values, self.fps, self._tissue.internal_forces)
+        self.solver = _FaceSolver(
+            mesh, [SOFT_TISSUE, SALIVA], dt=self.dt, damping=settings.damping,
+            hourglass_kappa=settings.hourglass_kappa,
+            prescribed=[(self.drive.jaw_nodes, self.drive.jaw)],
+            forces=[(np.arange(mesh.n_nodes), self.drive.force)],
+            element_hook=self.saliva.hook(fem.saliva), unchecked=fem.saliva)
+        self.rest_gaps = fem.rest_gaps
+
+    @property
+    def n_frames(self) -> int:
+        return len(self.values)
+
+    @property
+    def duration(self) -> float:
+        return (self.n_frames - 1) / self.fps
+
+    def saliva_state(self, vertices) -> dict:
+        """Per-frame saliva measures: broken fraction and openings along the seam (mesh)."""
+        op = seam_openings(self.fem, vertices, self.rest_gaps)
+        return {"broken_fraction": float(self.saliva.broken.mean()) if len(self.saliva.broken) else 0.0,
+                "open_count": op["count"], "open_span": op["span"], "open_fraction": op["open_fraction"],
+                "centre_gap": op["centre_gap"], "max_stretch": float(self.saliva.stretch.max())}
+
+    def frames(self, start: dict | None = None):
+        """Simulate, yielding a :class:`SimFrame` per track frame.
+
+        Parameters
+        ----------
+        start : dict, optional
+            A checkpoint from :meth:`checkpoint`: continue after its frame.
+        """
+        first = 0
+        u0 = v0 = None
+        if start is not None:
+            first = int(start["frame"])
+            u0, v0 = start["displacement"], start["velocity"]
+            self.saliva.set_state(start)
+        remaining = self.n_frames - 1 - first
+        if remaining < 0:
+            return
+        t0 = first / self.fps
+        spf = self.steps_per_frame
+        # The solver's clock starts at 0; shift the loads so its t = 0 is frame `first`.
+        self.drive.offset = t0
+        self.drive._i = None
+        for fr in self.solver.run(remaining * spf, output_every=spf, initial_displacement=u0,
+                                  initial_velocity=v0):
+            k = first + fr.step // spf
+            if start is not None and k == first:
+                continue
+            base = self.rig.pose(self.values[k])
+            verts = self.fem.surface(fr.displacement, base)
+            yield SimFrame(k, k / self.fps, verts, self.fem.display_vertices(verts, self.rest_gaps),
+                           fr.displacement, fr.velocity, self.saliva_state(verts))
+
+    def checkpoint(self, frame: SimFrame) -> dict:
+        """Everything :meth:`frames` needs to continue after ``frame``."""
+        return {"frame": frame.index, "displacement": frame.displacement, "velocity": frame.velocity,
+                **self.saliva.state(), "fingerprint": self.fingerprint()}
+
+    def fingerprint(self) -> str:
+        """A digest of the model, track and settings: a checkpoint only resumes the same run."""
+        import hashlib
+        h = hashlib.sha256()
+        for arr in (self.fem.mesh.nodes, self.fem.mesh.hexes, self.values, self.saliva.glue):
+            h.update(np.ascontiguousarray(arr).tobytes())
+        h.update(repr((self.physics, self.fps, self.dt, self.settings.damping, self.settings.hourglass_kappa,
+                       self.settings.saliva)).encode())
+        return h.hexdigest()[:16]
+
+
+class _FaceSolver:
+    """Factory of :class:`~visemeface.physics.tled.TLEDSolver` that leaves given elements unchecked."""
+
+    def __new__(cls, *args, unchecked=(), **kwargs):
+        from visemeface.physics.tled import TLEDSolver
+
+        class FaceSolver(TLEDSolver):
+            """A TLEDSolver whose inversion check skips the saliva elements.
+
+            A broken saliva film may fold over as the lips slide (its forces
+            are the decaying stored ones then, see ``saliva``); only tissue
+            inverting means the simulation diverged.
+            """
+
+            def _check(self, step, t):
+                jac = self._jac
+                if jac[self._checked].min() > 0.0:
+                    return
+                masked = jac.copy()
+                masked[self._unchecked] = 1.0
+                self._jac = masked
+                try:
+                    super()._check(step, t)
+                finally:
+                    self._jac = jac
+
+        solver = FaceSolver(*args, **kwargs)
+        solver._unchecked = np.asarray(unchecked, dtype=np.int64)
+        solver._checked = np.setdiff1d(np.arange(solver.mesh.n_elements), solver._unchecked)
+        return solver
+
+
+def track_values(track: pd.DataFrame, names) -> tuple[np.ndarray, float]:
+    """(frames, M) activations in ``names`` order and the frame rate of an ActivationTrack."""
+    if not isinstance(track, pd.DataFrame) or len(track) == 0:
+        raise InputError("the activation track is empty")
+    unknown = [c for c in track.columns if c not in names]
+    if unknown:
+        raise InputError(f"activation track column {unknown[0]!r} is not a rig muscle"
+                         + close_matches(str(unknown[0]), names))
+    fps = track.attrs.get("fps")
+    if fps is None and len(track) > 1:
+        fps = 1.0 / float(np.median(np.diff(track.index.to_numpy(dtype=float))))
+    if fps is None or not np.isfinite(fps) or fps <= 0:
+        raise InputError(f"activation track needs attrs['fps'] > 0, got {fps!r}")
+    values = track.reindex(columns=list(names), fill_value=0.0).to_numpy(dtype=np.float64)
+    if not np.isfinite(values).all():
+        r, c = np.argwhere(~np.isfinite(values))[0]
+        raise InputError(f"activation track has a non-finite value at frame {r}, column {names[c]!r}")
+    return values, float(fps)

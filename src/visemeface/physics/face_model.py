@@ -1,0 +1,452 @@
+"""The FEM face: the lower face extruded into hexahedra, with a saliva layer between the lips.
+
+Seed 000 §3.1 built its model by extruding the quads of a face surface into
+hex8 elements and marking a thin saliva layer between the lips. Here, from any
+:class:`~visemeface.face.mesh.FaceMesh` with regions and landmarks:
+
+* **Tissue.** The quads of the lower face (lips, cheeks, chin, up to below the
+  eyes; not the mouth cavity, eyes or nose) are extruded inward along their
+  (smoothed) vertex normals (:func:`visemeface.physics.hexmesh.extrude_quads`),
+  default 12 mm in two layers: a 1.5 mm front layer and the rest. Material id
+  0 (soft tissue).
+* **Bone.** The inner (bone-side) nodes are the skull, held fixed, except
+  those under the ``jaw`` region, which the jaw rotation moves (prescribed).
+* **Saliva.** The lip seams (``lip_seam_upper``/``lip_seam_lower``) are
+  paired by position across the mouth; between two neighbouring pairs one
+  hexahedron per tissue layer bridges the rest gap from the lower to the
+  upper lip: node order (ξ along the seam toward the subject's left, η from
+  the lower lip up, ζ from the bone side out), so the element's local y axis
+  runs across the lips. Material id 1 (saliva). The gap comes from the face
+  (``default_face(rest_gap=...)``) and must be wide enough for the stable
+  time step (the saliva's wave speed is ~14 m/s: 0.3 mm allows 1e-5 s).
+
+The model also knows where the lips are, so it measures the opening from the
+mesh (:func:`seam_openings`) and draws the rest gap (the saliva film) closed
+(:meth:`FEMFace.display_vertices`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from visemeface.errors import InputError
+from visemeface.face.mesh import FaceMesh
+from visemeface.physics.hexmesh import HexMesh, extrude_quads, vertex_normals
+
+TISSUE = 0
+SALIVA = 1
+#: Default tissue depth (m) and layers (seed: 10-15 mm of soft tissue).
+TISSUE_THICKNESS = 0.012
+LAYERS = 2
+#: Depth (m) of the saliva layer: the front band where the lips touch. The
+#: first tissue layer is this deep; the saliva bridges only it.
+SALIVA_DEPTH = 0.001
+#: Depth (m) of the tissue under the lips: their bone side is the teeth and
+#: gums, closer than the cheeks' and chin's.
+LIP_THICKNESS = 0.004
+#: Default rest gap between the lips that the saliva fills (m).
+REST_GAP = 0.001
+#: Regions never part of the FEM (they stay kinematic).
+EXCLUDED_REGIONS = ("mouth_cavity", "eyes", "brow", "nose")
+#: Normal-smoothing passes before extrusion (lips and chin curve tighter than 12 mm).
+NORMAL_SMOOTHING = 50
+
+
+@dataclass
+class FEMFace:
+    """A FaceMesh's lower face as a hex mesh with a saliva layer.
+
+    Attributes
+    ----------
+    face : FaceMesh
+    mesh : HexMesh
+        Material 0 tissue, 1 saliva; node sets ``surface``, ``inner``,
+        ``fixed``, ``jaw``.
+    surface_vertices : (S,) int
+        Face vertex of surface node ``s`` (node ``L·S + s`` lies ``L`` layers
+        under it).
+    layers : int
+    saliva : (E,) int
+        Element ids of the saliva elements.
+    saliva_pairs : (E, 2) int
+        The two seam pairs (indices into ``seam_pairs``) each saliva element bridges.
+    saliva_s : (E,) float
+        Element centre across the mouth: −1 right corner, 0 centre, +1 left corner.
+    seam_pairs : (P, 2) int
+        Face vertices (upper, lower) of the lip seams, ordered from the
+        subject's right corner to the left.
+    seam_s : (P,) float
+        Each pair's position across the mouth (as ``saliva_s``).
+    mouth_width : float
+        Corner-to-corner distance at rest (m).
+    depth_fraction : (layers + 1,) float
+        Depth of each node layer as a fraction of the tissue thickness.
+    """
+
+    face: FaceMesh
+    mesh: HexMesh
+    surface_vertices: np.ndarray
+    layers: int
+    saliva: np.ndarray
+    saliva_pairs: np.ndarray
+    saliva_s: np.ndarray
+    seam_pairs: np.ndarray
+    seam_s: np.ndarray
+    mouth_width: float
+    depth_fraction: np.ndarray | None = None
+
+    @property
+    def n_surface(self) -> int:
+        return len(self.surface_vertices)
+
+    @property
+    def tissue(self) -> np.ndarray:
+        return np.flatnonzero(self.mesh.material == TISSUE)
+
+    def counts(self) -> dict:
+        """Node and element counts (seed 000: 6,982 nodes, 3,414 hexahedra)."""
+        return {"nodes": int(self.mesh.n_nodes), "elements": int(self.mesh.n_elements),
+                "tissue": int(len(self.tissue)), "saliva": int(len(self.saliva)),
+                "fixed_nodes": int(len(self.mesh.node_sets["fixed"])),
+                "jaw_nodes": int(len(self.mesh.node_sets["jaw"]))}
+
+    def surface(self, u, base=None) -> np.ndarray:
+        """Face vertex positions (N, 3): ``base`` (default rest) with the FEM surface moved by ``u``.
+
+        ``u`` is the node displacement (n, 3); vertices outside the FEM keep
+        ``base`` (the kinematic pose, for brows and eyes).
+        """
+        v = np.array(self.face.vertices if base is None else base, dtype=np.float64, copy=True)
+        S = self.n_surface
+        v[self.surface_vertices] = self.mesh.nodes[:S] + np.asarray(u)[:S]
+        return v
+
+    def seam_gaps(self, vertices) -> np.ndarray:
+        """Distance (m) between each paired upper and lower seam vertex, (P,)."""
+        v = np.asarray(vertices)
+        return np.linalg.norm(v[self.seam_pairs[:, 0]] - v[self.seam_pairs[:, 1]], axis=1)
+
+    def display_vertices(self, vertices, rest_gaps=None) -> np.ndarray:
+        """Vertices to render: each lip-seam pair drawn ``rest gap`` closer together.
+
+        The rest gap is the saliva film (and numerical room for the saliva
+        elements), not an opening: drawn gap = max(gap − rest gap, 0) about the
+        pair's midpoint, so lips at rest or held by saliva look closed and an
+        opening shows exactly the separation beyond the film.
+        """
+        v = np.array(vertices, dtype=np.float64, copy=True)
+        if rest_gaps is None:
+            rest_gaps = self.rest_gaps
+        up, lo = self.seam_pairs[:, 0], self.seam_pairs[:, 1]
+        d = v[up] - v[lo]
+        g = np.linalg.norm(d, axis=1)
+        mid = 0.5 * (v[up] + v[lo])
+        unit = d / np.maximum(g, 1e-12)[:, None]
+        half = 0.5 * np.maximum(g - rest_gaps, 0.0)[:, None]
+        v[up] = mid + half * unit
+        v[lo] = mid - half * unit
+        return v
+
+    @property
+    def rest_gaps(self) -> np.ndarray:
+        return self.seam_gaps(self.face.vertices)
+
+
+def seam_pairs(face: FaceMesh) -> np.ndarray:
+    """Pair the upper and lower lip-seam vertices across the mouth.
+
+    Each upper seam vertex is paired with the lower seam vertex nearest to it
+    along the mouth axis (corner to corner); pairs are returned ordered from
+    the subject's right corner to the left, shared corner vertices dropped.
+
+    Returns
+    -------
+    (P, 2) int array of face vertex ids (upper, lower).
+    """
+    up, lo = face.region("lip_seam_upper"), face.region("lip_seam_lower")
+    if len(up) < 2 or len(lo) < 2:
+        raise InputError(f"the face's lip seams are too short to hold saliva "
+                         f"({len(up)} upper, {len(lo)} lower vertices)")
+    axis, origin = _mouth_axis(face)
+    xu = (face.vertices[up] - origin) @ axis
+    xl = (face.vertices[lo] - origin) @ axis
+    order_u, order_l = np.argsort(xu), np.argsort(xl)
+    up, xu, lo, xl = up[order_u], xu[order_u], lo[order_l], xl[order_l]
+    if len(up) == len(lo):
+        pairs = np.stack([up, lo], axis=1)
+    else:
+        nearest = np.abs(xl[None, :] - xu[:, None]).argmin(axis=1)
+        pairs = np.stack([up, lo[nearest]], axis=1)
+    return pairs[pairs[:, 0] != pairs[:, 1]]
+
+
+def _mouth_axis(face: FaceMesh):
+    left = face.landmark_position("mouth_corner_left")
+    right = face.landmark_position("mouth_corner_right")
+    axis = left - right
+    width = float(np.linalg.norm(axis))
+    if not width > 0:
+        raise InputError("the mouth corners coincide; cannot place the saliva layer")
+    return axis / width, 0.5 * (left + right)
+
+
+def fem_quads(face: FaceMesh, top: float | None = None, nose_radius: float | None = None,
+              back: float | None = None) -> np.ndarray:
+    """Mask of the face quads that become tissue: the lower face below the eyes.
+
+    Parameters
+    ----------
+    top : float, optional
+        Height (y, m) every vertex of a quad must be under; default halfway
+        between the nose tip and the eye centres.
+    nose_radius : float, optional
+        Quads with a vertex closer than this to the nose tip (in the x-y plane,
+        above the upper lip's top) are left out: the nose is too thin to
+        extrude 12 mm inward. Default 0.4 mouth widths; 0 when the face has a
+        ``nose`` region (which is left out instead).
+    back : float, optional
+        Quads with a vertex further back than this (z, m) are left out (the
+        sides of the head and under the chin). Default −1 mouth width.
+    """
+    v = face.vertices
+    width = float(np.linalg.norm(face.landmark_position("mouth_corner_left")
+                                 - face.landmark_position("mouth_corner_right")))
+    if top is None:
+        eye_y = 0.5 * (face.landmark_position("eye_centre_left")[1] + face.landmark_position("eye_centre_right")[1])
+        top = 0.5 * (eye_y + face.landmark_position("nose_tip")[1])
+    if nose_radius is None:
+        nose_radius = 0.0 if "nose" in face.regions else 0.4 * width
+    if back is None:
+        back = -width
+    excluded = np.zeros(face.n_vertices, dtype=bool)
+    for name in EXCLUDED_REGIONS:
+        if name in face.regions:
+            excluded[face.regions[name]] = True
+    nose = face.landmark_position("nose_tip")
+    lip_top = face.landmark_position("upper_lip_top")[1]
+    near_nose = (np.hypot(v[:, 0] - nose[0], v[:, 1] - nose[1]) < nose_radius) & (v[:, 1] > lip_top)
+    bad = excluded | near_nose | (v[:, 1] > top) | (v[:, 2] < back)
+    return ~bad[face.quads].any(axis=1)
+
+
+def smoothed_normals(vertices, quads, iterations: int = NORMAL_SMOOTHING) -> np.ndarray:
+    """Outward unit normals averaged over the quad graph, for extrusion.
+
+    Each pass replaces a normal by ½ (itself + the mean of its edge
+    neighbours'), a diffusion that widens the curvature radius the extrusion
+    sees: raw normals cross inside the lips and chin (radius < tissue depth)
+    and invert elements; 50 passes keep every default-face element's scaled
+    Jacobian above 0.3 at 12 mm.
+    """
+    import scipy.sparse as sp
+    v = np.asarray(vertices, dtype=np.float64)
+    q = np.asarray(quads, dtype=np.int64)
+    n = vertex_normals(v, q)
+    a = np.concatenate([q[:, i] for i in range(4)])
+    b = np.concatenate([q[:, (i + 1) % 4] for i in range(4)])
+    adj = sp.coo_matrix((np.ones(2 * len(a)), (np.r_[a, b], np.r_[b, a])), shape=(len(v), len(v))).tocsr()
+    adj.data[:] = 1.0
+    deg = np.maximum(np.asarray(adj.sum(axis=1)).ravel(), 1.0)
+    for _ in range(int(iterations)):
+        n = 0.5 * n + 0.5 * (adj @ n) / deg[:, None]
+    norm = np.linalg.norm(n, axis=1, keepdims=True)
+    return np.divide(n, norm, out=np.zeros_like(n), where=norm > 0)
+
+
+def _smooth_on_quads(values, quads, passes: int) -> np.ndarray:
+    """Average a per-vertex value with its quad-edge neighbours ``passes`` times."""
+    v = np.asarray(values, dtype=np.float64).copy()
+    q = np.asarray(quads)
+    a = np.concatenate([q[:, i] for i in range(4)])
+    b = np.concatenate([q[:, (i + 1) % 4] for i in range(4)])
+    for _ in range(passes):
+        acc = np.zeros_like(v)
+        cnt = np.zeros_like(v)
+        np.add.at(acc, a, v[b])
+        np.add.at(cnt, a, 1.0)
+        used = cnt > 0
+        v[used] = 0.5 * v[used] + 0.5 * acc[used] / cnt[used]
+    return v
+
+
+def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: int = LAYERS,
+                   top: float | None = None, saliva_gap: float | None = REST_GAP,
+                   saliva_depth: float | None = SALIVA_DEPTH, lip_thickness: float | None = LIP_THICKNESS,
+                   min_gap: float = 3e-4) -> FEMFace:
+    """Extrude the lower face into hexahedra and bridge the lips with saliva elements.
+
+    Parameters
+    ----------
+    face : FaceMesh
+        Needs the regions ``lip_seam_upper``, ``lip_seam_lower`` and ``jaw``
+        and the landmarks of docs/conventions.md.
+    thickness : float
+        Tissue depth (m).
+    layers : int
+        Element layers through the depth.
+    top : float, optional
+        See :func:`fem_quads`.
+    saliva_gap : float or None
+        Rest thickness (m) of the saliva layer. The seam pairs are moved apart
+        symmetrically (along +y) to this uniform gap, so every saliva element
+        has the same thickness, as the seed's breaking rule assumes ("all the
+        elements being the same thickness", §3.4.3); a face with closed lips
+        (``rest_gap=0``) works too. None keeps the face's own gaps and drops
+        pairs thinner than ``min_gap``. The model's ``face`` is the re-gapped
+        copy; :meth:`FEMFace.display_vertices` draws the gap closed.
+    lip_thickness : float or None
+        Tissue depth under the ``upper_lip``/``lower_lip`` regions (blended
+        into ``thickness`` over two rings of neighbours). Thin lips anchored
+        to the teeth let the jaw pull the centre of the seam hardest, so the
+        saliva fails there first; with lips as deep as the cheeks the upper
+        lip follows the lower one at the centre and the seam fails from the
+        corners (measured, see scripts/sticky_figures.py). None: uniform.
+    saliva_depth : float or None
+        With two or more layers, the first layer is this deep (the rest share
+        the remaining depth evenly) and the saliva bridges the lips over this
+        front band only. The band matters: the saliva (P-wave modulus
+        K + 4μ/3 ≈ 200 kPa, breaking at 4 % stretch with glue 0.08) holds
+        ≈ 8 kPa, ten times what soft tissue (μ = 800 Pa) carries at
+        moderate strain, so saliva as deep as the lips would never let go;
+        a shallow band is the real contact zone of the wet lips. None: all
+        layers equal and saliva through the full depth.
+    min_gap : float
+        Smallest rest gap (m) accepted between paired seam vertices: thinner
+        saliva would force a time step under the seed's 1e-5 s.
+
+    Returns
+    -------
+    FEMFace
+    """
+    if not (np.isfinite(thickness) and thickness > 0):
+        raise InputError(f"tissue thickness must be > 0, got {thickness}")
+    mask = fem_quads(face, top=top)
+    quads = face.quads[mask]
+    pairs = seam_pairs(face)
+    if saliva_gap is not None:
+        if not (np.isfinite(saliva_gap) and saliva_gap >= min_gap):
+            raise InputError(f"saliva gap must be >= {min_gap * 1e3:.3g} mm for a stable 1e-5 s step, "
+                             f"got {saliva_gap * 1e3:.3g} mm")
+        v = face.vertices.copy()
+        mid = 0.5 * (v[pairs[:, 0]] + v[pairs[:, 1]])
+        v[pairs[:, 0]] = mid + [0.0, 0.5 * saliva_gap, 0.0]
+        v[pairs[:, 1]] = mid - [0.0, 0.5 * saliva_gap, 0.0]
+        face = FaceMesh(v, face.quads, face.tris, dict(face.regions), dict(face.landmarks), face.colors)
+    used = np.unique(quads)
+    missing = np.setdiff1d(pairs.ravel(), used)
+    if len(missing):
+        raise InputError(f"lip seam vertex {int(missing[0])} is on no tissue quad of the lower face")
+    gaps = np.linalg.norm(face.vertices[pairs[:, 0]] - face.vertices[pairs[:, 1]], axis=1)
+    # Toward the corners the lips meet; saliva thinner than min_gap would force a
+    # smaller time step, so the layer stops where the gap gets that thin.
+    keep = gaps >= min_gap
+    if keep.sum() < 2:
+        raise InputError(f"rest gap between the lips is {gaps.max() * 1e3:.3g} mm at most, "
+                         f"< {min_gap * 1e3:.3g} mm: too thin for saliva elements at dt 1e-5 s; "
+                         f"build the face with a rest gap (default_face(rest_gap={REST_GAP}))")
+    pairs = pairs[keep]
+    # Paired seam vertices share one extrusion direction so each saliva element is a slab.
+    normals = smoothed_normals(face.vertices, quads)
+    common = normals[pairs[:, 0]] + normals[pairs[:, 1]]
+    common /= np.linalg.norm(common, axis=1, keepdims=True)
+    normals[pairs[:, 0]] = common
+    normals[pairs[:, 1]] = common
+    depth = np.full(face.n_vertices, float(thickness))
+    if lip_thickness is not None:
+        if not (np.isfinite(lip_thickness) and lip_thickness > 0):
+            raise InputError(f"lip thickness must be > 0, got {lip_thickness}")
+        lips = np.zeros(face.n_vertices, dtype=bool)
+        for name in ("upper_lip", "lower_lip"):
+            if name in face.regions:
+                lips[face.regions[name]] = True
+        depth[lips] = lip_thickness
+        depth = _smooth_on_quads(depth, quads, passes=2)
+    tissue = extrude_quads(face.vertices, quads, depth, layers=layers, material=TISSUE, normals=normals,
+                           check=False)
+    S = len(tissue.surface_vertices)
+    t_s = depth[tissue.surface_vertices][:, None]
+    if saliva_depth is not None and layers >= 2:
+        if not (0 < saliva_depth < t_s.min()):
+            raise InputError(f"saliva depth must be in (0, {t_s.min() * 1e3:.3g} mm), got {saliva_depth * 1e3:.3g} mm")
+        surf, n = tissue.nodes[:S], normals[tissue.surface_vertices]
+        fr = [np.zeros_like(t_s), np.full_like(t_s, saliva_depth)] + \
+             [saliva_depth + (t_s - saliva_depth) * k / (layers - 1) for k in range(1, layers)]
+        tissue.nodes = np.concatenate([surf - d * n for d in fr])
+        depths = np.array([0.0, saliva_depth] + [saliva_depth + (thickness - saliva_depth) * k / (layers - 1)
+                                                 for k in range(1, layers)])
+    else:
+        depths = np.linspace(0.0, thickness, layers + 1)
+    saliva_layers = 1 if (saliva_depth is not None and layers >= 2) else layers
+    node_of = np.full(face.n_vertices, -1, dtype=np.int64)
+    node_of[tissue.surface_vertices] = np.arange(S)
+
+    axis, origin = _mouth_axis(face)
+    width = float(np.linalg.norm(face.landmark_position("mouth_corner_left")
+                                 - face.landmark_position("mouth_corner_right")))
+    seam_s = ((face.vertices[pairs] - origin) @ axis).mean(axis=1) / (0.5 * width)
+    a = np.arange(len(pairs) - 1)
+    b = a + 1
+    up, lo = node_of[pairs[:, 0]], node_of[pairs[:, 1]]
+    sal = []
+    for L in range(saliva_layers):
+        inner, outer = (L + 1) * S, L * S
+        sal.append(np.stack([lo[a] + inner, lo[b] + inner, up[b] + inner, up[a] + inner,
+                             lo[a] + outer, lo[b] + outer, up[b] + outer, up[a] + outer], axis=1))
+    sal = np.concatenate(sal)
+    hexes = np.concatenate([tissue.hexes, sal])
+    material = np.concatenate([tissue.material, np.full(len(sal), SALIVA)])
+
+    inner_nodes = tissue.node_sets["inner"]
+    above = tissue.surface_vertices[inner_nodes - layers * S]
+    jaw_vertices = np.zeros(face.n_vertices, dtype=bool)
+    jaw_vertices[face.region("jaw")] = True
+    bone = inner_nodes
+    on_jaw = jaw_vertices[above]
+    sets = dict(tissue.node_sets)
+    sets["jaw"] = bone[on_jaw]
+    sets["fixed"] = bone[~on_jaw]
+    mesh = HexMesh(tissue.nodes, hexes, material=material, node_sets=sets,
+                   surface_vertices=tissue.surface_vertices)
+    from visemeface.physics.hexmesh import check_quality
+    check_quality(mesh, max_aspect=None)
+    saliva = np.arange(len(tissue.hexes), len(hexes))
+    return FEMFace(face=face, mesh=mesh, surface_vertices=tissue.surface_vertices, layers=layers,
+                   saliva=saliva, saliva_pairs=np.tile(np.stack([a, b], axis=1), (saliva_layers, 1)),
+                   saliva_s=np.tile(0.5 * (seam_s[a] + seam_s[b]), saliva_layers),
+                   seam_pairs=pairs, seam_s=seam_s, mouth_width=width,
+                   depth_fraction=np.asarray(depths) / thickness)
+
+
+def seam_openings(fem: FEMFace, vertices, rest_gaps=None, threshold: float = 0.02) -> dict:
+    """Openings along the lip seam, measured on the mesh.
+
+    A seam pair is *open* when its gap exceeds the rest gap by more than
+    ``threshold`` mouth widths. Contiguous open pairs form one opening.
+
+    Returns
+    -------
+    dict
+        ``count`` (number of openings), ``span`` (across-mouth extent of the
+        widest opening, in mouth widths: (s_max − s_min)/2), ``open_fraction``
+        (share of open pairs), ``centre_gap`` (gap growth at the pair nearest
+        the centre, mouth widths), ``open`` (P,) bool.
+    """
+    gaps = fem.seam_gaps(vertices)
+    if rest_gaps is None:
+        rest_gaps = fem.seam_gaps(fem.face.vertices)
+    growth = (gaps - rest_gaps) / fem.mouth_width
+    is_open = growth > threshold
+    runs, start = [], None
+    for i, o in enumerate(np.append(is_open, False)):
+        if o and start is None:
+            start = i
+        elif not o and start is not None:
+            runs.append((start, i - 1))
+            start = None
+    s = fem.seam_s
+    spans = [(s[j] - s[i]) / 2.0 for i, j in runs]
+    centre = int(np.argmin(np.abs(s)))
+    return {"count": len(runs), "span": float(max(spans)) if spans else 0.0,
+            "open_fraction": float(is_open.mean()), "centre_gap": float(growth[centre]), "open": is_open}
