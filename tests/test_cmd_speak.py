@@ -378,3 +378,14 @@ def test_speak_formats_match_reader():
     from visemeface.speech.transcripts import FORMATS as READER_FORMATS
 
     assert set(FORMATS) == {"auto", *READER_FORMATS}
+
+
+def test_speak_plain_text_transcript_with_rate(short):
+    from visemeface.speech.timeline import load_track
+
+    (short / "plain.txt").write_text("Bob moves five boats.\n")
+    for wpm in (120, 240):
+        assert main(["speak", "plain.txt", "--format", "text", "--rate", str(wpm), "--no-video",
+                     "--track", f"t{wpm}.csv", "-q"]) == 0
+    slow, fast = len(load_track(short / "t120.csv")), len(load_track(short / "t240.csv"))
+    assert 1.3 < slow / fast < 2.2  # twice the rate, about half the time (pauses do not all scale)

@@ -140,6 +140,11 @@ def register(subparsers) -> None:
     src.add_argument("--tier", help="TextGrid tier with the phones (default: the phone tier)")
     src.add_argument("--sample-rate", type=int, default=16000,
                      help="sample rate of TIMIT .PHN sample indices (default 16000)")
+    src.add_argument("--alphabet", help="phone alphabet of the labels: dectalk, arpabet, timit, ipa/mfa "
+                     "(default: detected)")
+    src.add_argument("--rate", type=float, metavar="WPM",
+                     help="plain-text transcripts only: speaking rate in words per minute "
+                     "(with --audio the text is timed to the recording instead)")
     add_render_arguments(p)
     p.set_defaults(func=run)
 
@@ -153,5 +158,6 @@ def run(args) -> int:
     from visemeface.speech.transcripts import read_transcript
 
     fmt = None if args.format == "auto" else args.format
-    segments = read_transcript(args.transcript, fmt=fmt, tier=args.tier, sample_rate=args.sample_rate)
+    segments = read_transcript(args.transcript, fmt=fmt, tier=args.tier, sample_rate=args.sample_rate,
+                               alphabet=args.alphabet, rate_wpm=args.rate, audio=args.audio)
     return render_segments(segments, args, out, settings)
