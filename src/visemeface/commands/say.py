@@ -39,8 +39,6 @@ def run(args) -> int:
 
     if not args.text.strip():
         raise InputError("nothing to say: the text is empty")
-    if args.rate is not None and not 20 <= args.rate <= 1000:
-        raise InputError(f"--rate must be between 20 and 1000 words per minute, got {args.rate:g}")
     out, settings = check_early(args, Path.cwd() / "say.mp4")
     segments = text_to_segments(args.text, rate_wpm=args.rate, audio=args.audio)
     return render_segments(segments, args, out, settings)
