@@ -3,8 +3,10 @@
 import numpy as np
 import pytest
 
+import cv2
+
 from visemeface.analysis.openings import (
-    MouthBox, OpeningDetector, detect_openings, median_kernel, otsu_threshold, rec601_grey)
+    MouthBox, OpeningDetector, detect_openings, median_kernel, median_mask, otsu_threshold, rec601_grey)
 from visemeface.analysis.synthetic import Ellipse, mouth_image
 from visemeface.errors import InputError
 
@@ -122,6 +124,26 @@ def test_otsu_three_levels_lands_on_the_darkest():
     assert 40 < t < 95
     two = np.concatenate([rng.normal(200, 5, 5000), rng.normal(120, 5, 3000)])   # skin and lips only
     assert otsu_threshold(np.bincount(two.astype(int), minlength=256)) is None
+
+
+@pytest.mark.parametrize("k", [3, 5, 7, 11, 15])
+def test_median_mask_is_median_then_threshold(k):
+    """Threshold decomposition: the majority vote equals OpenCV's median blur, borders included."""
+    rng = np.random.default_rng(k)
+    for grey in (rng.integers(0, 256, (61, 83), dtype=np.uint8),
+                 cv2.GaussianBlur(rng.integers(0, 256, (61, 83), dtype=np.uint8), (0, 0), 2.0)):
+        for t in (40, 100, 127, 128, 200):
+            np.testing.assert_array_equal(median_mask(grey <= t, k), cv2.medianBlur(grey, k) <= t)
+
+
+def test_large_mouth_uses_the_large_kernel():
+    """At ~800 px (kernel 11) a 4 px dark speck on the lips is blurred away, a real opening is kept."""
+    box = (100, 100, 800, 400)
+    e = Ellipse(500, 300, 120, 40)
+    img = mouth_image((600, 1000), box, [e, Ellipse(300, 300, 4, 4)], noise=4.0, seed=11)
+    op = detect_openings(img, box, min_area=0)
+    assert op.count == 1
+    assert op.largest_area * 800 ** 2 == pytest.approx(e.area, rel=0.03)
 
 
 def test_rec601_weights():

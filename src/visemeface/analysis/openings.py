@@ -10,7 +10,8 @@ jaw-opened mouth; ``pad=0`` analyses exactly the box, as seed 001 does.
 Inside that region:
 
 1. Rec.601 luma, :math:`Y = 0.299 r + 0.587 g + 0.114 b`.
-2. Median blur with an odd kernel scaled to the mouth width,
+2. Median blur with an odd kernel scaled to the mouth width (applied to the
+   thresholded image by threshold decomposition, see :func:`median_mask`),
    :math:`k = \\max(3, \\mathrm{odd}(\\mathrm{round}(11 w / 800)))` (seed 001:
    11 px for an 800 px mouth), which removes noise and small highlights.
 3. Binary threshold: the opening is *dark*, ``Y <= t``. ``t`` is fixed or found
@@ -212,6 +213,19 @@ def otsu_threshold(hist: np.ndarray, min_contrast: float = 40.0,
     return float(best[0])
 
 
+def median_mask(binary: np.ndarray, k: int) -> np.ndarray:
+    """k x k median filter of a boolean image (majority vote), replicated borders.
+
+    Median filtering commutes with thresholding (threshold decomposition):
+    :math:`\\mathrm{median}_k(Y) \\le t \\iff \\#\\{Y \\le t \\text{ in the window}\\} \\ge (k^2 + 1)/2`,
+    so ``median_mask(Y <= t, k) == (cv2.medianBlur(Y, k) <= t)`` exactly, while a
+    box sum costs O(1) per pixel instead of a large-kernel median.
+    """
+    counts = cv2.boxFilter(np.ascontiguousarray(binary, dtype=bool).view(np.uint8), cv2.CV_16U, (k, k),
+                           normalize=False, borderType=cv2.BORDER_REPLICATE)
+    return counts >= (k * k + 1) // 2
+
+
 def teeth_mask(rgb: np.ndarray, saturation_max: int = 60, value_min: int = 150) -> np.ndarray:
     """Boolean mask of teeth-like pixels: HSV saturation <= ``saturation_max`` and value >= ``value_min``.
 
@@ -273,19 +287,26 @@ class OpeningDetector:
         object.__setattr__(self, "pad", tuple(float(v) for v in pad))
 
     def opening_mask(self, crop: np.ndarray, w: int) -> tuple[np.ndarray, float | None]:
-        """uint8 mask (255 = opening) of an RGB crop of a mouth ``w`` px wide, and the threshold used."""
-        grey = cv2.medianBlur(rec601_grey(crop), median_kernel(w))
+        """uint8 mask (255 = opening) of an RGB crop of a mouth ``w`` px wide, and the threshold used.
+
+        The mask is ``median_k(Y) <= t`` with ``k = median_kernel(w)``,
+        computed as :func:`median_mask` (exact, and O(1) per pixel for large
+        kernels). Otsu's ``t`` comes from the histogram of ``Y`` median-blurred
+        with ``min(k, 5)``, which already removes noise and specks.
+        """
+        k = median_kernel(w)
+        grey = rec601_grey(crop)
+        small = cv2.medianBlur(grey, min(k, 5))
         if self.threshold == "otsu":
-            hist = np.bincount(grey.ravel(), minlength=256)
+            hist = cv2.calcHist([small], [0], None, [256], [0, 256]).ravel()   # (256,) or (256, 1)
             t = otsu_threshold(hist, self.min_contrast, self.max_dark_ratio)
             if t is None:
                 return np.zeros(grey.shape, np.uint8), None
         else:
             t = float(self.threshold)
-        dark = grey <= t
+        dark = small <= t if k <= 5 else median_mask(grey <= t, k)
         if self.teeth:
-            teeth = teeth_mask(crop, self.teeth_saturation, self.teeth_value).view(np.uint8)
-            teeth = cv2.medianBlur(teeth * 255, median_kernel(w)) > 0
+            teeth = median_mask(teeth_mask(crop, self.teeth_saturation, self.teeth_value), k)
             both = (dark | teeth).view(np.uint8)
             n, labels = cv2.connectedComponents(both, connectivity=8)
             # Teeth count only where they touch the dark cavity: white skin
