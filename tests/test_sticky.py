@@ -185,3 +185,175 @@ def test_compiled_hook_follows_the_same_rule_as_update():
         hook(step, step * 1e-5, Fm, fm)
         np.testing.assert_allclose(fm[[2, 0, 1]], want)
         assert a.broken.tolist() == b.broken.tolist()
+
+
+# --------------------------------------------------------------------------- the FEM face driven by a track
+# A coarse face (about 600 hexahedra, 6 saliva elements) and short jaw ramps keep these fast.
+
+from visemeface.physics import drive  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def model():
+    from visemeface.face.procedural import default_face
+    from visemeface.muscles.rig import MuscleRig
+    from visemeface.physics.face_model import build_fem_face
+    from visemeface.physics.tled import set_threads
+    set_threads(1)          # shared 2-core CI: one thread avoids oversubscription
+    face = default_face(resolution=1500)
+    return build_fem_face(face), MuscleRig.from_file(face)
+
+
+def _ramp(rig, fps, start=0.02, ramp=0.1, hold=0.15, jaw=0.35, extra=None):
+    keys = [(0.0, 0.0), (start, 0.0), (start + ramp, 1.0), (start + ramp + hold, 1.0)]
+    t = np.arange(int(round(keys[-1][0] * fps)) + 1) / fps
+    v = drive.smoothstep_keyframes(t, keys)
+    cols = {"jaw": jaw * v, **{k: a * v for k, a in (extra or {}).items()}}
+    return drive.make_track(t, cols, rig.names, fps)
+
+
+def _run(model, track, physics="sticky", **settings):
+    fem, rig = model
+    sim = drive.StickySimulation(fem, rig, track, physics=physics,
+                                 settings=drive.PhysicsSettings(**settings))
+    frames = []
+    for fr in sim.frames():
+        frames.append((fr.index, fr.time, fr.vertices, sim.saliva.broken.copy(), fr.saliva))
+    return sim, frames
+
+
+@pytest.fixture(scope="module")
+def opened(model):
+    fem, rig = model
+    track = _ramp(rig, fps=1000)
+    return {p: _run(model, track, physics=p) for p in ("sticky", "elastic")}
+
+
+def _lips(fem):
+    return np.unique(fem.seam_pairs.ravel())
+
+
+def test_same_equilibrium_with_and_without_glue_once_open_wide(model, opened):
+    fem, rig = model
+    lips = np.unique(np.concatenate([fem.face.region("upper_lip"), fem.face.region("lower_lip")]))
+    sticky, elastic = opened["sticky"][1][-1][2], opened["elastic"][1][-1][2]
+    rms = np.sqrt(np.mean(np.sum((sticky[lips] - elastic[lips]) ** 2, axis=1))) / fem.mouth_width
+    assert rms <= 0.01
+    # ... and that equilibrium is the kinematic posture (the force calibration). The FEM
+    # face carries the 1 mm saliva gap, so compare displacements from each rest shape.
+    sim = opened["elastic"][0]
+    kin = rig.pose(sim.values[-1]) - rig.face.vertices
+    fe = elastic - fem.face.vertices
+    rms_kin = np.sqrt(np.mean(np.sum((fe[lips] - kin[lips]) ** 2, axis=1))) / fem.mouth_width
+    assert rms_kin <= 0.05
+
+
+def test_sticky_lips_part_at_the_centre_first_and_later_than_elastic(model, opened):
+    fem, _ = model
+    s_frames = opened["sticky"][1]
+    e_frames = opened["elastic"][1]
+    rest = fem.rest_gaps
+
+    def first_parting(frames):
+        for f in frames:
+            g = (fem.seam_gaps(f[2]) - rest) / fem.mouth_width
+            if g.max() > 0.002:
+                return f[1], g
+    # Without glue the whole width parts at once, following the jaw (corners already apart).
+    t_e, g_e = first_parting(e_frames)
+    assert g_e.min() > 0.0
+    # With glue the lips hold longer and part at the centre while the corners stay together.
+    t_s, g_s = first_parting(s_frames)
+    assert t_s > t_e
+    assert np.argmax(g_s) == np.argmin(np.abs(fem.seam_s))
+    assert g_s.min() / g_s.max() < 0.7 * g_e.min() / g_e.max()
+    # The saliva fails at the centre first and the failure runs to the corners.
+    first_s = next(i for i, f in enumerate(s_frames) if f[3].any())
+    broken = s_frames[first_s][3]
+    assert np.abs(fem.saliva_s[broken]).max() < np.abs(fem.saliva_s[~broken]).min()
+    counts = [f[3].sum() for f in s_frames[first_s:]]
+    assert counts[-1] == len(fem.saliva) and np.all(np.diff(counts[:counts.index(len(fem.saliva)) + 1]) >= 0)
+    # The opening (gap beyond the film > 2 % of the mouth width) comes at a wider jaw with glue.
+    open_s = next(f[1] for f in s_frames if f[4]["open_count"] > 0)
+    open_e = next(f[1] for f in e_frames if f[4]["open_count"] > 0)
+    assert open_s > open_e
+
+
+def test_central_glue_gives_two_openings_that_merge(model):
+    fem, rig = model
+    _, frames = _run(model, _ramp(rig, fps=1000, hold=0.03), glue_profile="centre=0.18")
+    counts = [f[4]["open_count"] for f in frames]
+    assert 2 in counts
+    two = counts.index(2)
+    assert 1 in counts[two:]
+    merge = two + counts[two:].index(1)
+    span = np.array([f[4]["open_span"] for f in frames])
+    # The width of the largest opening jumps when the stuck centre lets go.
+    assert np.diff(span)[merge - 1] == pytest.approx(np.diff(span).max())
+
+
+def test_one_sided_glue_opens_the_other_side_first(model):
+    fem, rig = model
+    _, frames = _run(model, _ramp(rig, fps=1000, hold=0.0), glue_profile="right=0.3,left=0")
+    first = next(f for f in frames if f[4]["open_count"] > 0)
+    from visemeface.physics.face_model import seam_openings
+    op = seam_openings(fem, first[2])["open"]
+    assert op[fem.seam_s > 0].any() and not op[fem.seam_s < 0].any()
+
+
+def test_evaporation_makes_a_later_opening_unzip_sooner(model):
+    fem, rig = model
+    wet_early = _ramp(rig, fps=500, start=0.02, hold=0.0)
+    late = _ramp(rig, fps=500, start=0.12, hold=0.0)
+
+    def jaw_at_break(track, evaporation):
+        _, frames = _run(model, track, saliva=drive.SalivaParams(evaporation=evaporation))
+        i = next(i for i, f in enumerate(frames) if f[3].all())
+        return track["jaw"].iloc[i]
+
+    early = jaw_at_break(wet_early, 600.0)      # moisture 100 -> 88 at the break
+    later = jaw_at_break(late, 600.0)           # moisture ~30 by then: weaker glue
+    assert later < 0.8 * early
+
+
+def test_resume_from_a_checkpoint_continues_the_run(model):
+    fem, rig = model
+    track = _ramp(rig, fps=200, hold=0.0, ramp=0.05)
+    sim = drive.StickySimulation(fem, rig, track)
+    full = list(sim.frames())
+    sim2 = drive.StickySimulation(fem, rig, track)
+    it = sim2.frames()
+    for fr in it:
+        if fr.index == 5:
+            ck = sim2.checkpoint(fr)
+            break
+    sim3 = drive.StickySimulation(fem, rig, track)
+    rest = list(sim3.frames(ck))
+    assert [f.index for f in rest] == [f.index for f in full[6:]]
+    err = max(np.abs(a.vertices - b.vertices).max() for a, b in zip(rest, full[6:]))
+    assert err < 1e-3 * fem.mouth_width
+
+
+def test_bad_physics_input_is_refused_before_simulating(model):
+    fem, rig = model
+    track = _ramp(rig, fps=100, hold=0.0)
+    with pytest.raises(InputError, match="exceeds the stable limit"):
+        drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(dt=1e-3))
+    with pytest.raises(InputError, match="names no saliva element"):
+        drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(glue_profile="0.95..0.99=1"))
+    with pytest.raises(InputError, match="unknown physics 'stiky'"):
+        drive.StickySimulation(fem, rig, track, physics="stiky")
+    bad = track.copy()
+    bad["nonsense_muscle"] = 0.0
+    with pytest.raises(InputError, match="not a rig muscle"):
+        drive.StickySimulation(fem, rig, bad)
+
+
+def test_simulate_track_yields_renderable_frames_at_the_track_rate(model):
+    fem, rig = model
+    track = _ramp(rig, fps=50, hold=0.0, ramp=0.04)
+    states = []
+    frames = list(drive.simulate_track(fem.face, rig, track, physics="elastic", fem=fem, states=states))
+    assert len(frames) == len(track) and frames[0].shape == (fem.face.n_vertices, 3)
+    assert frames[0].dtype == np.float32 and len(states) == len(track)
+    assert np.allclose(fem.seam_gaps(frames[0]), 0.0, atol=1e-7)     # closed at rest

@@ -445,3 +445,53 @@ def track_values(track: pd.DataFrame, names) -> tuple[np.ndarray, float]:
         r, c = np.argwhere(~np.isfinite(values))[0]
         raise InputError(f"activation track has a non-finite value at frame {r}, column {names[c]!r}")
     return values, float(fps)
+
+
+def physics_face(face, rig=None, fem=None):
+    """(fem, rig) for a face: the FEM model and a rig on the same face (built if not given)."""
+    from visemeface.muscles.rig import MuscleRig
+    from visemeface.physics.face_model import build_fem_face
+
+    if fem is None:
+        fem = build_fem_face(face)
+    if rig is None:
+        rig = MuscleRig.from_file(face)
+    return fem, rig
+
+
+def simulate_track(face, rig, track: pd.DataFrame, physics: str = "sticky",
+                   settings: PhysicsSettings | None = None, fem=None, states: list | None = None):
+    """Animate ``track`` on the FEM face: an iterator of vertex arrays at the track's fps.
+
+    The kinematic path's drop-in for ``--physics sticky|elastic``: yields one
+    float32 (N, 3) array per track row, the face's vertices (FEM lower face,
+    kinematic brows and eyes) with the lips' rest gap drawn closed
+    (:meth:`FEMFace.display_vertices`), ready for ``Renderer(face).render``.
+    All input checks (time step, glue, moisture) run before the first frame.
+
+    Parameters
+    ----------
+    face : FaceMesh
+        The face to animate (lips may touch at rest; the model opens a 1 mm
+        saliva gap and draws it closed).
+    rig : MuscleRig or None
+        The rig on ``face`` (``MuscleRig.from_file(face)`` if None).
+    track : DataFrame
+        ActivationTrack.
+    physics : {"sticky", "elastic"}
+    settings : PhysicsSettings, optional
+    fem : FEMFace, optional
+        A prebuilt model of ``face`` (:func:`~visemeface.physics.face_model.build_fem_face`).
+    states : list, optional
+        If given, each frame's saliva measures (dict) are appended to it.
+    """
+    fem, rig = physics_face(face, rig, fem)
+    sim = StickySimulation(fem, rig, track, physics=physics, settings=settings)
+
+    def frames():
+        for fr in sim.frames():
+            if states is not None:
+                states.append({"frame": fr.index, "time": fr.time, **fr.saliva})
+            yield fr.display.astype(np.float32)
+
+    return frames()
