@@ -14,8 +14,10 @@ def register(subparsers) -> None:
         "top-level contours. Per frame: number of openings and the largest one's area, width and height, "
         "normalised by the mouth width (the box width: its left/right edges on the mouth corners; "
         "area by the width squared), plus frame differences of area and width. The mouth box comes "
-        "from --box, --box-json, or a sidecar <video>.json written by the renderer "
-        '({"mouth_box": [x, y, w, h], "fps": 30, "size": [W, H]}).',
+        "from --box, --box-json, or a sidecar <video>.json "
+        '({"mouth_box": [x, y, w, h], "fps": 30, "size": [W, H]}; `visemeface face --camera-json` writes '
+        "one for the rendered face). A margin around the box (--pad) is analysed too, so a box drawn on "
+        "the rest lips does not cut off a dropped jaw.",
         epilog="example: visemeface analyze take1.mp4 --box 310,420,400,180 -o take1.csv --plot take1.png "
         "--overlay take1_overlay",
     )
