@@ -208,3 +208,22 @@ def test_rendered_face_closed_then_opening():
     assert 0 < found[1].largest_height < found[2].largest_height
     assert 0 < found[1].largest_area < found[2].largest_area
     assert found[2].largest_width > 0.6                     # the opening spans most of the mouth
+
+
+@pytest.mark.parametrize("hull,teeth", [(False, False), (True, True)])
+def test_translation_and_mirror_invariance(hull, teeth):
+    """Moving the frame content with the box, or mirroring both, changes no metric."""
+    img = mouth_image((400, 400), (50, 150, 300, 100),
+                      [Ellipse(130, 200, 30, 12), Ellipse(220, 202, 45, 18)], specks=6, seed=12)
+    box = (50, 150, 300, 100)
+    ref = detect_openings(img, box, hull=hull, teeth=teeth)
+    moved = np.zeros((460, 430, 3), np.uint8)
+    moved[37:437, 21:421] = img
+    shifted = detect_openings(moved, (71, 187, 300, 100), hull=hull, teeth=teeth)
+    mirrored = detect_openings(img[:, ::-1], (400 - 50 - 300, 150, 300, 100), hull=hull, teeth=teeth)
+    assert ref.count == shifted.count == mirrored.count == 2
+    for other in (shifted, mirrored):
+        np.testing.assert_array_equal(other.area, ref.area)
+        np.testing.assert_array_equal(other.width, ref.width)
+        np.testing.assert_array_equal(other.height, ref.height)
+    np.testing.assert_array_equal(shifted.contours[0] - [21, 37], ref.contours[0])
