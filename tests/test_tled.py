@@ -397,3 +397,26 @@ def test_a_run_restarted_from_a_frame_continues_the_motion():
                               initial_velocity=mid.velocity))[-1]
     amplitude = np.abs(full[2000].displacement).max()
     assert np.abs(resumed.displacement - full[2000].displacement).max() < 2e-3 * amplitude
+
+
+def test_centre_and_uniform_gradients_agree_on_parallelepipeds_only_uniform_passes_distorted_patch():
+    box = box_mesh((3, 2, 2), (0.03, 0.02, 0.02))
+    shear = np.array([[1.0, 0.3, 0.1], [0.0, 0.9, 0.2], [0.1, 0.0, 1.1]])
+    slanted = HexMesh(box.nodes @ shear.T, box.hexes, node_sets=box.node_sets)   # parallelepipeds
+    rng = np.random.default_rng(8)
+    u = rng.normal(0, 1e-3, slanted.nodes.shape)
+    uniform = TLEDSolver(slanted, SOFT_TISSUE, dt=1e-5)
+    centre = TLEDSolver(slanted, SOFT_TISSUE, dt=1e-5, gradient="centre")
+    f_u, f_c = uniform.internal_forces(u), centre.internal_forces(u)
+    assert np.abs(f_u - f_c).max() < 1e-10 * np.abs(f_u).max()
+    # Distorted: homogeneous stretch leaves interior forces with the centre rule only.
+    m = _distorted_box(amount=0.25)
+    u = m.nodes * np.array([0.3, -0.1, 0.1])
+    inner = np.setdiff1d(np.arange(m.n_nodes), m.node_sets["surface"])
+    residual = {}
+    for rule in ("uniform", "centre"):
+        f = TLEDSolver(m, SOFT_TISSUE, dt=1e-5, gradient=rule).internal_forces(u)
+        residual[rule] = np.abs(f[inner]).max() / np.abs(f).max()
+    assert residual["uniform"] < 1e-9 < 1e-3 < residual["centre"]
+    with pytest.raises(InputError, match="unknown gradient rule"):
+        TLEDSolver(m, SOFT_TISSUE, dt=1e-5, gradient="corner")

@@ -31,10 +31,11 @@ gradient ``∂h/∂x`` (8 × 3) and rest volume V:
 6. fixed degrees of freedom stay zero, prescribed ones are set to their
    value at ``t^{n+1}``.
 
-Shape-function gradients are Flanagan & Belytschko's (1981) uniform
+Shape-function gradients are by default Flanagan & Belytschko's (1981) uniform
 gradients ``∂h/∂x = (1/V) ∫ ∂h/∂x dV`` (exact by 2 × 2 × 2 Gauss), which equal
 the centre values for parallelepipeds and make the patch test exact on
-distorted meshes. Hourglass control (Flanagan–Belytschko, as in NiftySim):
+distorted meshes (NiftySim's B-matrix method); ``gradient="centre"`` uses the
+centre values with ``8 det J₀`` instead, as NiftySim's CPU element does. Hourglass control (Flanagan–Belytschko, as in NiftySim):
 ``γ = Γ − (∂h/∂x)(xᵀ Γ)`` with Γ the 8 × 4 hourglass base vectors and
 ``k = κ V (λ + 2μ) Σ(∂h/∂x)² / 8``; ``γ`` is orthogonal to every affine
 field, so hourglass forces vanish for rigid and homogeneous motion.
@@ -164,6 +165,29 @@ def element_geometry(nodes: np.ndarray, hexes: np.ndarray) -> tuple[np.ndarray, 
     with np.errstate(divide="ignore", invalid="ignore"):
         dhdx = B / V[:, None, None]
     return np.ascontiguousarray(dhdx), V
+
+
+def centre_gradients(nodes: np.ndarray, hexes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Shape-function gradients at the element centre and ``8 det J₀`` (NiftySim's CPU element).
+
+    ``∂h/∂x = (∂h/∂ξ)(0) · J₀⁻¹`` with ``J₀ = ∂x/∂ξ`` at ξ = 0 and ``∂hₐ/∂ξ(0) = sₐ/8``.
+    Equal to :func:`element_geometry` for parallelepipeds; on other shapes
+    a homogeneous stress leaves residual forces at interior nodes (the patch
+    test fails), which is why the solver defaults to the uniform gradient.
+
+    Returns
+    -------
+    dhdx : ndarray (e, 8, 3)
+    volume : ndarray (e,)
+        ``8 det J₀``, the one-point estimate of the volume.
+    """
+    x = np.asarray(nodes, dtype=np.float64)[np.asarray(hexes)]
+    dN = NODE_SIGNS / 8.0
+    J0 = np.einsum("eai,ak->eik", x, dN)                           # ∂x_i/∂ξ_k
+    det = np.linalg.det(J0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = np.linalg.inv(np.where(det[:, None, None] != 0, J0, np.eye(3)))
+    return np.ascontiguousarray(np.einsum("ak,eki->eai", dN, inv)), 8.0 * det
 
 
 def hourglass_shape_vectors(nodes: np.ndarray, hexes: np.ndarray, dhdx: np.ndarray) -> np.ndarray:
@@ -525,6 +549,12 @@ class TLEDSolver:
         reused between steps: copy what must be kept.
     backend : {"numba", "numpy"}
         The numba kernels, or the plain-numpy reference.
+    gradient : {"uniform", "centre"}
+        ``"uniform"`` (default): Flanagan–Belytschko mean gradients with the
+        exact volume (:func:`element_geometry`; NiftySim's B-matrix method),
+        which pass the patch test on any mesh. ``"centre"``: gradients at the
+        element centre with ``8 det J₀`` (:func:`centre_gradients`; NiftySim's
+        CPU default and DESIGN §6 read literally). Identical for parallelepipeds.
     parallel : bool, optional
         Split the numba loops over threads (:func:`set_threads`). Default: only
         for meshes of at least ``PARALLEL_MIN_ELEMENTS`` elements, since on small
@@ -547,7 +577,7 @@ class TLEDSolver:
                  damping: float = 0.0, hourglass_kappa: float = DEFAULT_HOURGLASS_KAPPA,
                  fixed=None, prescribed: Sequence = (), forces: Sequence = (),
                  element_hook: ElementHook | None = None, backend: str = "numba",
-                 parallel: bool | None = None):
+                 parallel: bool | None = None, gradient: str = "uniform"):
         if backend not in ("numba", "numpy"):
             raise InputError(f"unknown TLED backend {backend!r}; use 'numba' or 'numpy'")
         if not (np.isfinite(damping) and damping >= 0):
@@ -572,11 +602,20 @@ class TLEDSolver:
         mat = material_table(materials, mesh.material)
         self.mu, self.K, self.rho = mat["mu"], mat["K"], mat["rho"]
         self.conn = np.ascontiguousarray(mesh.hexes, dtype=np.int64)
+        if gradient not in ("uniform", "centre"):
+            raise InputError(f"unknown gradient rule {gradient!r}; use 'uniform' or 'centre'")
+        self.gradient = gradient
         self.dhdx, self.volume = element_geometry(mesh.nodes, self.conn)
-        if not (self.volume > 0).all():
-            e = int(np.flatnonzero(~(self.volume > 0))[0])
+        # Exact volume for masses and hourglass stiffness; forces use V (uniform) or 8 det J0 (centre).
+        self.force_volume = self.volume
+        if gradient == "centre":
+            self.dhdx, self.force_volume = centre_gradients(mesh.nodes, self.conn)
+        bad = ~(self.volume > 0) | ~(self.force_volume > 0)
+        if bad.any():
+            e = int(np.flatnonzero(bad)[0])
             raise InputError(f"element {e} (nodes {self.conn[e].tolist()}) has volume "
-                             f"{self.volume[e]:.3g} m^3 <= 0: inverted or degenerate")
+                             f"{self.volume[e]:.3g} m^3 (centre estimate {self.force_volume[e]:.3g}) "
+                             f"<= 0: inverted or degenerate")
         self.gamma = hourglass_shape_vectors(mesh.nodes, self.conn, self.dhdx)
         a = np.einsum("eai,eai->e", self.dhdx, self.dhdx)
         lam_2mu = self.K + 4.0 * self.mu / 3.0                     # λ + 2μ with λ = K − 2μ/3
@@ -674,7 +713,7 @@ class TLEDSolver:
     # -- kernels ------------------------------------------------------------
 
     def _element_forces(self, u: np.ndarray, want_energy: bool) -> None:
-        self._elem_kernel(u, self.conn, self.dhdx, self.volume, self.gamma, self.hourglass_stiffness,
+        self._elem_kernel(u, self.conn, self.dhdx, self.force_volume, self.gamma, self.hourglass_stiffness,
                           self.mu, self.K, self._fe, self._jac, self._fdef, self.element_hook is not None,
                           self._energy, want_energy)
 
