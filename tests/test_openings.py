@@ -198,12 +198,12 @@ def test_rendered_face_closed_then_opening():
     try:
         from visemeface.muscles.rig import default_rig
         from visemeface.render.renderer import Renderer
-        rig = default_rig()
-        renderer = Renderer(rig.face, size=(256, 256), view="mouth")
     except ImportError as exc:          # renderer not importable in this checkout
         pytest.skip(f"renderer unavailable: {exc}")
-    box = renderer.mouth_box()
-    found = [detect_openings(renderer.render(rig.pose({"jaw": j})), box) for j in (0.0, 0.5, 1.0)]
+    rig = default_rig()
+    with Renderer(rig.face, size=(256, 256), view="mouth") as renderer:
+        box = renderer.mouth_box()
+        found = [detect_openings(renderer.render(rig.pose({"jaw": j})), box) for j in (0.0, 0.5, 1.0)]
     assert [f.count for f in found] == [0, 1, 1]
     assert 0 < found[1].largest_height < found[2].largest_height
     assert 0 < found[1].largest_area < found[2].largest_area
