@@ -35,7 +35,8 @@ Shape-function gradients are by default Flanagan & Belytschko's (1981) uniform
 gradients ``∂h/∂x = (1/V) ∫ ∂h/∂x dV`` (exact by 2 × 2 × 2 Gauss), which equal
 the centre values for parallelepipeds and make the patch test exact on
 distorted meshes (NiftySim's B-matrix method); ``gradient="centre"`` uses the
-centre values with ``8 det J₀`` instead, as NiftySim's CPU element does. Hourglass control (Flanagan–Belytschko, as in NiftySim):
+centre values with ``8 det J₀`` instead, as NiftySim's CPU element does.
+Hourglass control (Flanagan–Belytschko, as in NiftySim):
 ``γ = Γ − (∂h/∂x)(xᵀ Γ)`` with Γ the 8 × 4 hourglass base vectors and
 ``k = κ V (λ + 2μ) Σ(∂h/∂x)² / 8``; ``γ`` is orthogonal to every affine
 field, so hourglass forces vanish for rigid and homogeneous motion.
