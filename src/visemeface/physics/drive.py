@@ -8,8 +8,8 @@ without saliva, its equilibrium *is* that posture:
    the surface nodes; on the bone side, zero for the skull and the jaw's
    rotation for the jaw nodes; linear through the tissue's depth in between.
 2. **Jaw.** The bone-side nodes are *prescribed* U(**a**): the rig's jaw
-   rotation with the jaw weight of the vertex above (zero on the skull, so
-   those stay put). The jaw is bone: it is moved, not pushed.
+   rotation with the jaw weight of the vertex above; those of weight zero
+   (the skull) are fixed. The jaw is bone: it is moved, not pushed.
 3. **Muscle forces.** The external force on the free nodes is the internal
    elastic force of the soft tissue held in that field,
 
@@ -157,12 +157,18 @@ class FaceDrive:
         self.tissue_forces = tissue_forces
         mesh = fem.mesh
         S, L = fem.n_surface, fem.layers
-        # Every bone-side node is prescribed: it turns with the jaw by the rig's
-        # jaw weight of the vertex above it (zero on the skull), so bone and
-        # skin follow one smooth weight and the jaw line tears no element.
-        self.jaw_nodes = mesh.node_sets["inner"]
-        self._inner_rest = mesh.nodes[self.jaw_nodes]
-        self._inner_w = rig.jaw_weight[fem.surface_vertices[self.jaw_nodes - L * S]].copy()
+        # Every bone-side node turns with the jaw by the rig's jaw weight of the
+        # vertex above it, so bone and skin follow one smooth weight and the jaw
+        # line tears no element: nodes of weight 0 (the skull) are fixed, the
+        # others prescribed.
+        inner = mesh.node_sets["inner"]
+        w = rig.jaw_weight[fem.surface_vertices[inner - L * S]]
+        self.fixed_nodes = inner[w == 0]
+        self.jaw_nodes = inner[w != 0]
+        self._inner = inner
+        self._inner_rest = mesh.nodes[inner]
+        self._inner_w = w.copy()
+        self._moving = np.flatnonzero(w != 0)
         self._jaw_col = list(rig.names).index("jaw")
         self._cache: dict[int, tuple] = {}
         #: Track time of the solver's t = 0 (non-zero when resuming).
@@ -191,6 +197,9 @@ class FaceDrive:
         bone = self.bone_displacement(float(np.asarray(a)[self._jaw_col]))
         return np.concatenate([(1.0 - w) * surf + w * bone for w in fem.depth_fraction])
 
+    def _bone_part(self, U):
+        return U[self.jaw_nodes]
+
     def keyframe(self, k: int):
         """(external force (n, 3), jaw displacement (k, 3), U) at frame ``k`` (cached)."""
         k = int(np.clip(k, 0, self.n_frames - 1))
@@ -198,7 +207,7 @@ class FaceDrive:
             if len(self._cache) > 4:
                 self._cache.pop(min(self._cache))
             U = self.kinematic_field(self.values[k])
-            self._cache[k] = (self.tissue_forces(U), U[self.jaw_nodes], U)
+            self._cache[k] = (self.tissue_forces(U), self._bone_part(U), U)
         return self._cache[k]
 
     def _interval(self, t: float):
@@ -326,7 +335,7 @@ class StickySimulation:
         self.drive = FaceDrive(fem, rig, self.values, self.fps, self._tissue.internal_forces)
         self.solver = _FaceSolver(
             mesh, [SOFT_TISSUE, SALIVA], dt=self.dt, damping=settings.damping,
-            hourglass_kappa=settings.hourglass_kappa,
+            hourglass_kappa=settings.hourglass_kappa, fixed=self.drive.fixed_nodes,
             prescribed=[(self.drive.jaw_nodes, self.drive.jaw)],
             forces=[(np.arange(mesh.n_nodes), self.drive.force)],
             element_hook=self.saliva.hook(fem.saliva), unchecked=fem.saliva)
@@ -411,7 +420,7 @@ class _FaceSolver:
 
             def _check(self, step, t):
                 jac = self._jac
-                if jac[self._checked].min() > 0.0:
+                if jac[self._checked].min() > 0.0:     # a slice view when the saliva comes last
                     return
                 masked = jac.copy()
                 masked[self._unchecked] = 1.0
@@ -423,7 +432,9 @@ class _FaceSolver:
 
         solver = FaceSolver(*args, **kwargs)
         solver._unchecked = np.asarray(unchecked, dtype=np.int64)
-        solver._checked = np.setdiff1d(np.arange(solver.mesh.n_elements), solver._unchecked)
+        checked = np.setdiff1d(np.arange(solver.mesh.n_elements), solver._unchecked)
+        contiguous = len(checked) and checked[-1] - checked[0] + 1 == len(checked)
+        solver._checked = slice(int(checked[0]), int(checked[-1]) + 1) if contiguous else checked
         return solver
 
 

@@ -1,0 +1,102 @@
+"""Speed of the sticky-lip FEM face, printed as JSON lines.
+
+    PYTHONPATH=src python benchmarks/sticky.py                 # both figures
+    PYTHONPATH=src python benchmarks/sticky.py --seconds 0.2 --skip-speech
+
+1. ``fem_face``: wall seconds per simulated second for the default FEM face
+   (the "open" scenario's first ``--seconds``; target <= 60 s on 2 cores), at
+   each numba thread count in ``--threads``.
+2. ``speak_sticky``: the library path ``speak --physics sticky`` takes on the
+   3 s example (``transcripts/one_five_zero_zero_six.txt``): transcript ->
+   activation track -> :func:`visemeface.physics.drive.simulate_track` ->
+   render each frame (512 px, face view); wall seconds per simulated second.
+
+Figures taken on a shared machine are disturbed by its load: the load
+average is printed with them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+
+
+def emit(**kw):
+    print(json.dumps(kw), flush=True)
+
+
+def bench_fem_face(seconds: float, threads: int) -> None:
+    from visemeface.face.procedural import default_face
+    from visemeface.muscles.rig import MuscleRig
+    from visemeface.physics.drive import StickySimulation, scenario_track
+    from visemeface.physics.face_model import build_fem_face
+    from visemeface.physics.tled import set_threads
+
+    set_threads(threads)
+    face = default_face()
+    rig = MuscleRig.from_file(face)
+    fem = build_fem_face(face)
+    track = scenario_track("open", rig.names, fps=60)
+    track = track.iloc[: int(round(seconds * 60)) + 1]
+    sim = StickySimulation(fem, rig, track)
+    it = sim.frames()
+    next(it)                                   # compile / warm up (frame 0)
+    t0 = time.perf_counter()
+    n = 0
+    for _ in it:
+        n += 1
+    wall = time.perf_counter() - t0
+    simulated = n / sim.fps
+    emit(benchmark="fem_face", threads=threads, nodes=fem.mesh.n_nodes, hexahedra=fem.mesh.n_elements,
+         saliva=len(fem.saliva), dt=sim.dt, simulated_s=round(simulated, 4), wall_s=round(wall, 2),
+         wall_per_simulated_s=round(wall / simulated, 1), steps_per_s=round(n * sim.steps_per_frame / wall),
+         target_wall_per_simulated_s=60, load_average=os.getloadavg()[0])
+
+
+def bench_speak(threads: int) -> None:
+    from visemeface.face.procedural import default_face
+    from visemeface.muscles.rig import MuscleRig
+    from visemeface.physics.drive import simulate_track
+    from visemeface.physics.tled import set_threads
+    from visemeface.postures.library import load_visemes
+    from visemeface.render.renderer import Renderer
+    from visemeface.resources import transcripts_path
+    from visemeface.speech.timeline import activation_track
+    from visemeface.speech.transcripts import read_transcript
+
+    set_threads(threads)
+    t0 = time.perf_counter()
+    face = default_face()
+    rig = MuscleRig.from_file(face)
+    segments = read_transcript(transcripts_path("one_five_zero_zero_six.txt"))
+    track = activation_track(segments, load_visemes(rig=rig), fps=30)
+    frames = simulate_track(face, rig, track, physics="sticky")
+    renderer = Renderer(face, size=(512, 512), view="face")
+    n = 0
+    for v in frames:
+        renderer.render(v)
+        n += 1
+    wall = time.perf_counter() - t0
+    seconds = (n - 1) / 30.0
+    emit(benchmark="speak_sticky", transcript="one_five_zero_zero_six.txt", threads=threads, frames=n,
+         simulated_s=round(seconds, 3), wall_s=round(wall, 1), wall_per_simulated_s=round(wall / seconds, 1),
+         load_average=os.getloadavg()[0])
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--seconds", type=float, default=0.5, help="simulated seconds for fem_face (default 0.5)")
+    ap.add_argument("--threads", default="1,2", help="numba thread counts to try (default 1,2)")
+    ap.add_argument("--skip-speech", action="store_true")
+    args = ap.parse_args(argv)
+    counts = [int(x) for x in args.threads.split(",")]
+    for n in counts:
+        bench_fem_face(args.seconds, n)
+    if not args.skip_speech:
+        bench_speak(min(counts))
+
+
+if __name__ == "__main__":
+    main()
