@@ -189,7 +189,8 @@ def test_speak_end_to_end_all_exports(short, capsys):
     assert code == 0, capsys.readouterr().err
     assert "24 frames" in capsys.readouterr().out
     names = sorted(p.name for p in short.iterdir())
-    assert names == ["fr", "obj", "s.csv", "s.glb", "s.pc2", "short.mp4", "short.txt", "short.wav"]
+    assert names == ["fr", "obj", "s.csv", "s.glb", "s.pc2", "short.mp4", "short.mp4.json", "short.txt",
+                     "short.wav"]
 
     # MP4: one frame per track row, audio muxed for exactly as long, starting at 0
     info = export.read_video_info(short / "short.mp4")
@@ -230,6 +231,13 @@ def test_speak_end_to_end_all_exports(short, capsys):
             vid = np.frombuffer(raw, np.uint8).reshape(128, 128, 3).astype(float)
             png = export.read_png(short / "fr" / export.frame_name(10)).astype(float)
             assert np.abs(vid - png).mean() < 4
+
+    # the video's sidecar lets `analyze` find the mouth with no --box: shut on /m/, open on /aa/
+    assert main(["analyze", "short.mp4", "-o", "profile.csv"]) == 0, capsys.readouterr().err
+    import pandas as pd
+    profile = pd.read_csv(short / "profile.csv")
+    assert len(profile) == N_SHORT
+    assert profile["count"][6] == 0 and profile["count"][10] >= 1 and profile["area"][10] > 0
 
     # glTF: 25 muscle targets + jaw samples; plays the rig's poses; lasts the utterance
     gl, arr = _glb_arrays(short / "s.glb")

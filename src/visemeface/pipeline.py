@@ -369,6 +369,13 @@ def plan_outputs(out: Outputs) -> None:
     for kind, p in paths.items():
         if kind != "frames" or not out.resume:  # --resume may reuse an existing frames folder
             check_new(p, out.force)
+    if out.video is not None:
+        check_new(video_sidecar(out.video), out.force)
+
+
+def video_sidecar(video: Path) -> Path:
+    """``out.mp4.json``: the mouth box and frame rate, so ``visemeface analyze out.mp4`` needs no --box."""
+    return Path(video).parent / (Path(video).name + ".json")
 
 
 @dataclass
@@ -429,6 +436,7 @@ def animate(track: pd.DataFrame, rig, out: Outputs, settings: RenderSettings,
             renderer = stack.enter_context(
                 Renderer(face, size=(settings.size, settings.size), view=settings.view,
                          samples=settings.msaa))
+            mouth_box = renderer.mouth_box()
         video = obj = pc2 = None
         if out.video is not None:
             video = stack.enter_context(export.VideoWriter(
@@ -468,5 +476,15 @@ def animate(track: pd.DataFrame, rig, out: Outputs, settings: RenderSettings,
             from visemeface.speech.timeline import save_track
 
             save_track(track, out.track, force=out.force)
+    if out.video is not None:
+        from visemeface.analysis.video import MouthBox, write_sidecar
+
+        try:
+            MouthBox.of(mouth_box)
+        except InputError:
+            pass  # thumbnails too small to measure a mouth in: no sidecar
+        else:
+            write_sidecar(video_sidecar(out.video), mouth_box, fps=settings.fps,
+                          size=(settings.size, settings.size), force=out.force)
     return {"frames": n, "kept": frames.kept if frames else 0,
             "rendered": (n - frames.kept) if (frames and need_image) else (n if need_image else 0)}
