@@ -154,7 +154,7 @@ def fig_merge(fem, rig):
 
 def fig_asymmetry(fem, rig):
     for name, kw, tr in (("one-sided activation (left lower-lip depressor)", {},
-                          ramp(rig, 1000, hold=0.0, extra={"depressor_labii_inferioris_left": 0.6})),
+                          ramp(rig, 1000, hold=0.0, extra={"depressor_labii_inferioris_left": 0.3})),
                          ("one-sided glue (right 0.3, left 0)", {"glue_profile": "right=0.3,left=0"},
                           ramp(rig, 1000, hold=0.0))):
         _, frames = run(fem, rig, tr, **kw)

@@ -83,7 +83,7 @@ def make_track(times, values: dict, names, fps: float) -> pd.DataFrame:
 
 
 def scenario_track(name: str, names, fps: float = 60.0, jaw: float = 0.35, side: str = "both",
-                   lip: float = 0.6) -> pd.DataFrame:
+                   lip: float = 0.3) -> pd.DataFrame:
     """The activation track of a named scenario.
 
     Parameters
@@ -150,8 +150,9 @@ class FaceDrive:
         ``u (n, 3) -> (n, 3)`` internal forces of the tissue elements alone.
     """
 
-    def __init__(self, fem, rig, values, fps: float, tissue_forces):
+    def __init__(self, fem, rig, values, fps: float, tissue_forces, field_smoothing: int = 0):
         self.fem, self.rig = fem, rig
+        self.field_smoothing = int(field_smoothing)
         self.values = np.asarray(values, dtype=np.float64)
         self.fps = float(fps)
         self.tissue_forces = tissue_forces
@@ -194,8 +195,30 @@ class FaceDrive:
         """U(a) (n, 3): the rig's surface displacement, bone values, linear through the depth."""
         fem = self.fem
         surf = self.rig.displacement(a)[fem.surface_vertices]
+        if self.field_smoothing:
+            surf = self._smooth(surf)
         bone = self.bone_displacement(float(np.asarray(a)[self._jaw_col]))
         return np.concatenate([(1.0 - w) * surf + w * bone for w in fem.depth_fraction])
+
+    def _smooth(self, field):
+        """Average the surface field with its quad neighbours (``field_smoothing`` passes).
+
+        The rig's field turns steeply at the mouth corners (lip trim, jaw
+        weight); held as an FEM equilibrium it crushes the corner elements
+        (J < 0.3 at jaw 0.35) and they buckle. A few passes spread it over a
+        couple of elements; the lips' own shape barely changes (the
+        calibration figure measures it).
+        """
+        from visemeface.physics.face_model import _smooth_on_quads
+        if not hasattr(self, "_surf_quads"):
+            node_of = np.full(self.fem.face.n_vertices, -1, dtype=np.int64)
+            node_of[self.fem.surface_vertices] = np.arange(self.fem.n_surface)
+            q = node_of[self.fem.face.quads]
+            self._surf_quads = q[(q >= 0).all(axis=1)]
+        out = np.empty_like(field)
+        for i in range(3):
+            out[:, i] = _smooth_on_quads(field[:, i], self._surf_quads, self.field_smoothing)
+        return out
 
     def _bone_part(self, U):
         return U[self.jaw_nodes]

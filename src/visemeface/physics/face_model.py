@@ -121,25 +121,7 @@ class FEMFace:
         v = np.array(self.face.vertices if base is None else base, dtype=np.float64, copy=True)
         S = self.n_surface
         v[self.surface_vertices] = self.mesh.nodes[:S] + np.asarray(u)[:S]
-        if base is not None:
-            # The mouth cavity is not in the FEM: carry it with the lip seam it hangs from
-            # (the FEM's deviation from the kinematic pose at its nearest seam vertex).
-            cav, seam = self._cavity_links()
-            if len(cav):
-                v[cav] += v[seam] - np.asarray(base)[seam]
         return v
-
-    def _cavity_links(self):
-        if not hasattr(self, "_cav"):
-            cav = self.face.regions.get("mouth_cavity", np.zeros(0, np.int64))
-            cav = np.setdiff1d(cav, self.surface_vertices)
-            seam = self.seam_pairs.ravel()
-            if len(cav) and len(seam):
-                d = np.linalg.norm(self.face.vertices[cav][:, None] - self.face.vertices[seam][None], axis=2)
-                self._cav = (cav, seam[d.argmin(axis=1)])
-            else:
-                self._cav = (np.zeros(0, np.int64), np.zeros(0, np.int64))
-        return self._cav
 
     def seam_gaps(self, vertices) -> np.ndarray:
         """Distance (m) between each paired upper and lower seam vertex, (P,)."""
