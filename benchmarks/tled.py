@@ -2,6 +2,9 @@
 
 Prints JSON lines:
 
+* ``{"bench": "machine", "free_core_speedup": ...}``: how much a trivially parallel loop
+  speeds up on the requested threads (about 2 on an idle 2-core machine; near 1 when
+  other processes hold a core, and then no 2-thread figure below can scale);
 * ``{"bench": "tled_step", "mesh": ..., "backend": ..., "threads": ..., "ms_per_step": ...,
   "element_steps_per_s": ..., "ratio_to_numpy": ...}`` for the full step (element forces,
   hourglass, assembly, central difference, boundary conditions, J check), wall clock;
@@ -37,7 +40,9 @@ import numpy as np
 
 from visemeface.physics.hexmesh import box_mesh, extrude_quads
 from visemeface.physics.materials import SOFT_TISSUE
-from visemeface.physics.tled import TLEDSolver, set_threads
+from visemeface.physics.tled import TLEDSolver, set_threads  # first: sets numba's cache folder, GOMP_SPINCOUNT
+
+from numba import njit, prange  # noqa: E402
 
 
 def seed_size_mesh():
@@ -102,12 +107,46 @@ def time_kernels(solver, reps, blocks=5):
     return tuple(best)
 
 
+@njit(parallel=True, cache=True)
+def _busy(n):  # pragma: no cover - compiled
+    out = np.zeros(n)
+    for i in prange(n):
+        x = 0.0
+        for k in range(20000):
+            x += np.sin(k * 1e-3 + i)
+        out[i] = x
+    return out.sum()
+
+
+def free_core_speedup(threads):
+    """Speed-up of an embarrassingly parallel loop on ``threads`` vs 1 thread.
+
+    About ``threads`` on an idle machine; near 1 when other processes hold the
+    other cores, in which case no multi-threaded figure here can scale.
+    """
+    _busy(2 * threads)
+    times = []
+    for t in (1, threads):
+        set_threads(t)
+        best = np.inf
+        for _ in range(3):
+            t0 = time.perf_counter()
+            _busy(200)
+            best = min(best, time.perf_counter() - t0)
+        times.append(best)
+    return times[0] / times[1]
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer steps")
     parser.add_argument("--threads", type=int, nargs="+", default=[1, 2], help="numba thread counts")
     args = parser.parse_args(argv)
     scale = 0.25 if args.quick else 1.0
+    threads = max(args.threads)
+    print(json.dumps({"bench": "machine", "cpu_count": os.cpu_count(), "threads": threads,
+                      "free_core_speedup": round(free_core_speedup(threads), 2),
+                      "load_avg_1min": round(os.getloadavg()[0], 2)}), flush=True)
     meshes = {"seed": seed_size_mesh(), "box64k": box_mesh((40, 40, 40), (0.08, 0.08, 0.08))}
     numba_steps = {"seed": int(4000 * scale), "box64k": int(250 * scale)}
     numpy_steps = {"seed": int(50 * scale), "box64k": max(5, int(10 * scale))}
