@@ -7,9 +7,11 @@ without saliva, its equilibrium *is* that posture:
 1. **Kinematic field.** U(**a**) on every FEM node: the rig's displacement on
    the surface nodes; on the bone side, zero for the skull and the jaw's
    rotation for the jaw nodes; linear through the tissue's depth in between.
-2. **Jaw.** The bone-side nodes are *prescribed* U(**a**): the rig's jaw
-   rotation with the jaw weight of the vertex above; those of weight zero
-   (the skull) are fixed. The jaw is bone: it is moved, not pushed.
+2. **Jaw and lip muscle layer.** The bone-side nodes are *prescribed*
+   U(**a**): the rig's jaw rotation with the jaw weight of the vertex above;
+   under the lips (``fem.lip_weight``) the rig's full field, the lips' deep
+   layer being their own muscle (orbicularis oris) rather than bone; nodes
+   with neither (the skull) are fixed. The bone is moved, not pushed.
 3. **Muscle forces.** The external force on the free nodes is the internal
    elastic force of the soft tissue held in that field,
 
@@ -162,14 +164,18 @@ class FaceDrive:
         # vertex above it, so bone and skin follow one smooth weight and the jaw
         # line tears no element: nodes of weight 0 (the skull) are fixed, the
         # others prescribed.
+        # Under the lips the bone side is the lips' own muscle layer: it follows
+        # the rig's full field there (blended by ``fem.lip_weight``).
         inner = mesh.node_sets["inner"]
         w = rig.jaw_weight[fem.surface_vertices[inner - L * S]]
-        self.fixed_nodes = inner[w == 0]
-        self.jaw_nodes = inner[w != 0]
+        lam = fem.lip_weight if fem.lip_weight is not None else np.zeros(S)
+        self._lip = lam[inner - L * S]
+        moving = (w != 0) | (self._lip > 0)
+        self.fixed_nodes = inner[~moving]
+        self.jaw_nodes = inner[moving]
         self._inner = inner
         self._inner_rest = mesh.nodes[inner]
         self._inner_w = w.copy()
-        self._moving = np.flatnonzero(w != 0)
         self._jaw_col = list(rig.names).index("jaw")
         self._cache: dict[int, tuple] = {}
         #: Track time of the solver's t = 0 (non-zero when resuming).
@@ -198,7 +204,9 @@ class FaceDrive:
         if self.field_smoothing:
             surf = self._smooth(surf)
         bone = self.bone_displacement(float(np.asarray(a)[self._jaw_col]))
-        return np.concatenate([(1.0 - w) * surf + w * bone for w in fem.depth_fraction])
+        lam = self._lip[:, None]
+        bone = (1.0 - lam) * bone + lam * surf
+        return np.concatenate([(1.0 - w[:, None]) * surf + w[:, None] * bone for w in fem.depth_fraction])
 
     def _smooth(self, field):
         """Average the surface field with its quad neighbours (``field_smoothing`` passes).
@@ -222,6 +230,7 @@ class FaceDrive:
 
     def _bone_part(self, U):
         return U[self.jaw_nodes]
+
 
     def keyframe(self, k: int):
         """(external force (n, 3), jaw displacement (k, 3), U) at frame ``k`` (cached)."""

@@ -81,8 +81,12 @@ class FEMFace:
         Each pair's position across the mouth (as ``saliva_s``).
     mouth_width : float
         Corner-to-corner distance at rest (m).
-    depth_fraction : (layers + 1,) float
-        Depth of each node layer as a fraction of the tissue thickness.
+    depth_fraction : (layers + 1, S) float
+        Depth of each node layer under each surface node, as a fraction of
+        the tissue depth there (0 at the skin, 1 at the bone side).
+    lip_weight : (S,) float
+        1 under the lips, 0 away from them, blended over two rings: where the
+        bone side is the lips' own muscle layer rather than skull or jaw.
     """
 
     face: FaceMesh
@@ -96,6 +100,7 @@ class FEMFace:
     seam_s: np.ndarray
     mouth_width: float
     depth_fraction: np.ndarray | None = None
+    lip_weight: np.ndarray | None = None
 
     @property
     def n_surface(self) -> int:
@@ -354,6 +359,7 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
     normals[pairs[:, 0]] = common
     normals[pairs[:, 1]] = common
     depth = np.full(face.n_vertices, float(thickness))
+    lip_w = np.zeros(face.n_vertices)
     if lip_thickness is not None:
         if not (np.isfinite(lip_thickness) and lip_thickness > 0):
             raise InputError(f"lip thickness must be > 0, got {lip_thickness}")
@@ -362,7 +368,8 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
             if name in face.regions:
                 lips[face.regions[name]] = True
         depth[lips] = lip_thickness
-        depth = _smooth_on_quads(depth, quads, passes=2)
+        lip_w = _smooth_on_quads(lips.astype(np.float64), quads, passes=2)
+        depth = thickness + (lip_thickness - thickness) * lip_w
     tissue = extrude_quads(face.vertices, quads, depth, layers=layers, material=TISSUE, normals=normals,
                            check=False)
     S = len(tissue.surface_vertices)
@@ -374,10 +381,9 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
         fr = [np.zeros_like(t_s), np.full_like(t_s, saliva_depth)] + \
              [saliva_depth + (t_s - saliva_depth) * k / (layers - 1) for k in range(1, layers)]
         tissue.nodes = np.concatenate([surf - d * n for d in fr])
-        depths = np.array([0.0, saliva_depth] + [saliva_depth + (thickness - saliva_depth) * k / (layers - 1)
-                                                 for k in range(1, layers)])
+        depth_fraction = np.stack([d[:, 0] for d in fr]) / t_s[:, 0]
     else:
-        depths = np.linspace(0.0, thickness, layers + 1)
+        depth_fraction = np.repeat(np.linspace(0.0, 1.0, layers + 1)[:, None], S, axis=1)
     saliva_layers = 1 if (saliva_depth is not None and layers >= 2) else layers
     node_of = np.full(face.n_vertices, -1, dtype=np.int64)
     node_of[tissue.surface_vertices] = np.arange(S)
@@ -416,7 +422,7 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
                    saliva=saliva, saliva_pairs=np.tile(np.stack([a, b], axis=1), (saliva_layers, 1)),
                    saliva_s=np.tile(0.5 * (seam_s[a] + seam_s[b]), saliva_layers),
                    seam_pairs=pairs, seam_s=seam_s, mouth_width=width,
-                   depth_fraction=np.asarray(depths) / thickness)
+                   depth_fraction=depth_fraction, lip_weight=lip_w[tissue.surface_vertices])
 
 
 def seam_openings(fem: FEMFace, vertices, rest_gaps=None, threshold: float = 0.02) -> dict:
