@@ -270,7 +270,10 @@ class Renderer:
             raise RuntimeError(f"cannot create a headless OpenGL (EGL) context: {exc}") from None
         ctx = self.ctx
         self.program = ctx.program(vertex_shader=_VERTEX_SHADER, fragment_shader=_FRAGMENT_SHADER)
-        for name, matrix in (("u_mvp", self.mvp), ("u_view", self.view_matrix)):
+        # The image is drawn upside down (y flipped in clip space, so winding flips too) because
+        # GL's row 0 is the bottom: the read-back is then already top-down, with no flip copy.
+        flip_y = np.diag([1.0, -1.0, 1.0, 1.0])
+        for name, matrix in (("u_mvp", flip_y @ self.mvp), ("u_view", self.view_matrix)):
             if name in self.program:          # a uniform the shader does not use is optimised away
                 self.program[name].write(matrix.T.astype("f4").tobytes())
         n = self.face.n_vertices
@@ -316,13 +319,14 @@ class Renderer:
             self.fbo_ms.use()
             ctx.enable(moderngl.DEPTH_TEST)
             ctx.disable(moderngl.CULL_FACE)
+            ctx.front_face = "cw"   # the y flip above mirrors the winding
             ctx.clear(*BACKGROUND, 1.0, depth=1.0)
             self.vao.render(moderngl.TRIANGLES)
             if self.fbo_ms is not self.fbo:
                 ctx.copy_framebuffer(self.fbo, self.fbo_ms)
-            # RGBA reads are ~8x faster than RGB in Mesa; drop alpha in numpy
-            raw = np.frombuffer(self.fbo.read(components=4, alignment=1), dtype=np.uint8)
-        return raw.reshape(h, w, 4)[::-1, :, :3].copy()
+            image = np.empty((h, w, 3), dtype=np.uint8)
+            self.fbo.read_into(image, components=3, alignment=1)
+        return image
 
     def release(self):
         """Free the GL objects and context (also done when garbage-collected)."""
