@@ -154,7 +154,7 @@ def fig_merge(fem, rig):
 
 def fig_asymmetry(fem, rig):
     for name, kw, tr in (("one-sided activation (left lower-lip depressor)", {},
-                          ramp(rig, 1000, hold=0.0, extra={"depressor_labii_inferioris_left": 0.3})),
+                          ramp(rig, 1000, hold=0.0, jaw=0.2, extra={"depressor_labii_inferioris_left": 0.3})),
                          ("one-sided glue (right 0.3, left 0)", {"glue_profile": "right=0.3,left=0"},
                           ramp(rig, 1000, hold=0.0))):
         _, frames = run(fem, rig, tr, **kw)
@@ -208,7 +208,10 @@ def main(argv=None):
                      ("evaporation", lambda: fig_evaporation(fem, rig)),
                      ("calibration", lambda: fig_calibration(*_coarse(args.calibration_resolution)))):
         if only is None or name in only:
-            fn()
+            try:
+                fn()
+            except Exception as e:  # a figure that fails is reported, the others still run
+                emit(figure=name, error=f"{type(e).__name__}: {str(e)[:300]}")
             print(f"# {name} done at {time.perf_counter() - t0:.0f} s", file=sys.stderr, flush=True)
 
 

@@ -397,7 +397,15 @@ class StickySimulation:
             A checkpoint from :meth:`checkpoint`: continue after its frame.
         """
         first = 0
-        u0 = v0 = None
+        # Start at rest in the first frame's posture (its static equilibrium without
+        # glue), not at the rest face: a track may begin mid-gesture.
+        u0 = self.drive.keyframe(0)[2] if np.any(self.values[0]) else None
+        v0 = None
+        if u0 is not None and start is None:
+            from visemeface.physics.saliva import deformation_gradient, hex_centre_gradients
+            X = self.fem.mesh.nodes[self.fem.mesh.hexes[self.fem.saliva]]
+            self.saliva.prime(deformation_gradient(u0[self.fem.mesh.hexes[self.fem.saliva]],
+                                                   hex_centre_gradients(X)))
         if start is not None:
             first = int(start["frame"])
             u0, v0 = start["displacement"], start["velocity"]

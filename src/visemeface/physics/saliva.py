@@ -436,6 +436,15 @@ class SalivaBreaking:
 
         return element_hook
 
+    def prime(self, F, t: float = 0.0) -> None:
+        """Start from a deformed state: elements already stretched past Z are parted (no force)."""
+        Q = stretch_across(np.asarray(F, dtype=np.float64), self.axis)
+        Q = np.where(np.linalg.det(F) > 0.0, Q, 1e300)
+        self.stretch = Q
+        parted = Q >= self.breaking_points(t)
+        self.broken |= parted
+        self.stored[parted] = 0.0
+
     def state(self) -> dict:
         """Arrays needed to resume: broken flags and stored forces."""
         return {"broken": self.broken.copy(), "stored": self.stored.copy()}
