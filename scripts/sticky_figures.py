@@ -70,10 +70,16 @@ def fig_calibration(fem, rig, fps=400):
     table = load_visemes()
     lips = lip_ids(fem)
     errs = {}
+    diverged = []
     for sym, row in table.iterrows():
         extra = {k: float(v) for k, v in row.items() if k != "jaw" and v != 0}
         tr = ramp(rig, fps, start=0.0, ramp_s=0.08, hold=0.17, jaw=float(row.get("jaw", 0.0)), extra=extra)
-        sim, frames = run(fem, rig, tr, physics="elastic")
+        try:
+            sim, frames = run(fem, rig, tr, physics="elastic")
+        except Exception as e:
+            diverged.append(sym)
+            emit(figure="calibration", viseme=sym, error=f"{type(e).__name__}: {str(e)[:160]}")
+            continue
         kin = rig.pose(sim.values[-1]) - rig.face.vertices
         got = frames[-1]["v"] - fem.face.vertices
         errs[sym] = float(np.sqrt(np.mean(np.sum((got[lips] - kin[lips]) ** 2, axis=1))) / fem.mouth_width)
@@ -81,7 +87,7 @@ def fig_calibration(fem, rig, fps=400):
     e = np.array(list(errs.values()))
     emit(figure="calibration_summary", visemes=len(e), median=round(float(np.median(e)), 5),
          max=round(float(e.max()), 5), worst=max(errs, key=errs.get), target=0.05,
-         within_target=int((e <= 0.05).sum()))
+         within_target=int((e <= 0.05).sum()), diverged=diverged)
 
 
 def mouth_profile(fem, frames, fps, size=512):
