@@ -176,3 +176,14 @@ def test_colours_from_regions_when_the_mesh_has_none():
     assert lum[[2, 3]].max() < 0.1                      # dark cavity
     assert c[0, 0] / c[0, 1] > 1.2 * c[10, 0] / c[10, 1]  # lips redder than skin
     assert lum[4] > lum[10]                            # pale eye
+
+
+def test_landmarks_path_that_is_a_folder_is_a_one_line_error(tmp_path):
+    from visemeface.errors import InputError
+    from visemeface.face.mesh import load_face
+    from visemeface.face.procedural import default_face
+
+    face = default_face(resolution=1500)
+    face.save(tmp_path / "m.obj")
+    with pytest.raises(InputError, match="cannot read"):
+        load_face(tmp_path / "m.obj", landmarks_path=tmp_path)

@@ -195,11 +195,9 @@ def test_pad_keeps_a_dropped_jaw_in_view():
 
 def test_rendered_face_closed_then_opening():
     """The project's own renderer: a closed mouth has no opening; the jaw opens one that grows."""
-    try:
-        from visemeface.muscles.rig import default_rig
-        from visemeface.render.renderer import Renderer
-    except ImportError as exc:          # renderer not importable in this checkout
-        pytest.skip(f"renderer unavailable: {exc}")
+    from visemeface.muscles.rig import default_rig
+    from visemeface.render.renderer import Renderer
+
     rig = default_rig()
     with Renderer(rig.face, size=(256, 256), view="mouth") as renderer:
         box = renderer.mouth_box()

@@ -244,6 +244,8 @@ def _default_text():
      'attachment = {at = "cheeck_{side}", offset = [0.35, 0.15, -0.1]}', "attachment"),
     ('insertion = {at = "mouth_corner_{side}", offset = [0.06, 0.02, -0.02]}',
      'insertion = {at = "mouth_corner_{side}", offset = [0.06, 0.02]}', "insertion"),
+    ('insertion = {at = "mouth_corner_{side}", offset = [0.06, 0.02, -0.02]}',
+     'insertion = {at = "mouth_corner_{side}", offset = [nan, 0.02, -0.02]}', "insertion"),
     ('kind = "linear"\nsides = ["left", "right"]\nlip = "both"\nrange = [0.0, 1.0]\nattachment = {at = "cheek_{side}", offset = [0.35',
      'kind = "linear"\nsides = ["left", "right"]\nlip = "both"\nrange = [1.0, 0.0]\nattachment = {at = "cheek_{side}", offset = [0.35',
      "range"),

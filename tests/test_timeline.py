@@ -270,3 +270,18 @@ def test_load_track_infers_fps_and_reports_bad_cells(tmp_path):
     p.write_text("jaw\n0.1\n")
     with pytest.raises(InputError, match="no 'time' column"):
         load_track(p)
+
+
+def test_closure_holds_only_the_lip_opening_functions():
+    """While /m/ is forced, disgust's nose wrinkler (levator labii superioris *alaeque nasi*) still acts;
+    the lip raiser (levator labii superioris) and the jaw do not."""
+    seg = segs(["aa", "m", "aa"], 0.2)
+    expr = expressions()
+    expr["levator_labii_superioris_alaeque_nasi_left"] = [0.0, 0.0, 0.6]
+    expr["levator_labii_superioris_left"] = [0.0, 0.0, 0.6]
+    track = activation_track(seg, toy_visemes(), fps=30, emotions={"surprise": 1.0}, expressions=expr)
+    t = track.index.to_numpy()
+    centre = int(np.argmin(np.abs(t - (0.3 + 0.2 + 0.1))))
+    assert track["jaw"].iloc[centre] == 0.0
+    assert track["levator_labii_superioris_left"].iloc[centre] == 0.0
+    assert track["levator_labii_superioris_alaeque_nasi_left"].iloc[centre] == pytest.approx(0.6)

@@ -39,6 +39,10 @@ class InputError(VisemefaceError, ValueError):
         super().__init__(where + message)
 
 
+class RenderUnavailable(VisemefaceError, RuntimeError):
+    """No headless OpenGL (EGL) context could be made on this machine."""
+
+
 def close_matches(name: str, known: Iterable[str], n: int = 3) -> str:
     """Return a hint like ``" (did you mean: a, b?)"`` or ``""``."""
     matches = difflib.get_close_matches(name, list(known), n=n, cutoff=0.5)

@@ -69,13 +69,6 @@ def split_quads(quads: np.ndarray) -> np.ndarray:
     return tris
 
 
-def face_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    r"""Area-weighted triangle normals :math:`(b - a) \times (c - a)` (length = 2·area)."""
-    v = np.asarray(vertices, dtype=np.float64)
-    a, b, c = v[triangles[:, 0]], v[triangles[:, 1]], v[triangles[:, 2]]
-    return np.cross(b - a, c - a)
-
-
 class NormalAccumulator:
     r"""Per-vertex normals for a fixed topology, fast enough for every frame.
 
@@ -325,7 +318,10 @@ def _read_sidecar(path: Path, vertices: np.ndarray) -> tuple[dict, dict, np.ndar
     """Parse and validate a landmarks sidecar against ``vertices``."""
     if not path.exists():
         raise InputError("landmarks file not found", path)
-    text = path.read_text(encoding="utf-8", errors="replace")
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except OSError as exc:
+        raise InputError(f"cannot read: {exc.strerror}", path) from None
     try:
         data = json.loads(text)
     except json.JSONDecodeError as exc:

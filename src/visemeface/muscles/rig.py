@@ -231,7 +231,8 @@ class _RigFileReader:
             raise self.error(entry, fld, "give exactly one of 'at' or 'mix'")
         offset = spec.get("offset", [0.0, 0.0, 0.0])
         if (not isinstance(offset, list) or len(offset) != 3
-                or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in offset)):
+                or not all(isinstance(x, (int, float)) and not isinstance(x, bool) and np.isfinite(x)
+                           for x in offset)):
             raise self.error(entry, fld, f"offset must be [x, y, z] in mouth widths, got {offset!r}")
         offset = np.array(offset, dtype=float)
         if side == "right":

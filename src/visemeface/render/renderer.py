@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from visemeface.errors import InputError
+from visemeface.errors import InputError, RenderUnavailable
 from visemeface.face.mesh import FaceMesh, NormalAccumulator
 
 VIEWS = ("face", "mouth", "three-quarter")
@@ -267,7 +267,7 @@ class Renderer:
         try:
             self.ctx = moderngl.create_context(standalone=True, backend="egl")
         except Exception as exc:  # no EGL: say so on one line
-            raise RuntimeError(f"cannot create a headless OpenGL (EGL) context: {exc}") from None
+            raise RenderUnavailable(f"cannot create a headless OpenGL (EGL) context: {exc}") from None
         ctx = self.ctx
         self.program = ctx.program(vertex_shader=_VERTEX_SHADER, fragment_shader=_FRAGMENT_SHADER)
         # The image is drawn upside down (y flipped in clip space, so winding flips too) because
@@ -296,7 +296,6 @@ class Renderer:
                 depth_attachment=ctx.depth_renderbuffer((w, h), samples=samples))
         else:
             self.fbo_ms = self.fbo
-        self._out = np.empty((h, w, 3), dtype=np.uint8)
 
     def render(self, vertices: np.ndarray | None = None) -> np.ndarray:
         """Render one frame; returns a new uint8 (H, W, 3) RGB array, row 0 at the top.

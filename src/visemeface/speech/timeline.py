@@ -89,6 +89,7 @@ FORCED = frozenset(CLOSURE) | frozenset(LABIODENTAL)
 #: bottom lip, levator labii superioris raises the upper one): an emotion does not move them
 #: while a p b m f v target is forced, so closure and contact survive e.g. surprise's jaw drop.
 LIP_OPENING = ("jaw", "depressor_labii_inferioris", "levator_labii_superioris")
+_LIP_OPENING_COLUMNS = frozenset(["jaw"] + [f"{m}_{s}" for m in LIP_OPENING[1:] for s in ("left", "right")])
 
 
 @lru_cache(maxsize=1)
@@ -413,7 +414,7 @@ def activation_track(segments: pd.DataFrame, visemes: pd.DataFrame, fps: float =
         added = W @ E
         # Keep lip closure / contact: the emotion does not move the lip-opening functions
         # while a p b m f v target is forced.
-        mouth = [j for j, c in enumerate(columns) if c.startswith(LIP_OPENING)]
+        mouth = [j for j, c in enumerate(columns) if c in _LIP_OPENING_COLUMNS]
         added[:, mouth] *= (1.0 - contact_strength)[:, None]
         values = values + added
         for c in expr.columns:
