@@ -51,3 +51,12 @@ def test_atomic_output_mode_follows_umask(tmp_path):
     finally:
         os.umask(old)
     assert (tmp_path / "a.png").stat().st_mode & 0o777 == 0o644
+
+
+def test_choose_normalises_and_suggests():
+    from visemeface.errors import choose
+
+    assert choose(" TextGrid ", ["textgrid", "lab"], "format") == "textgrid"
+    assert choose("tg", ["textgrid"], "format", aliases={"tg": "textgrid"}) == "textgrid"
+    with pytest.raises(InputError, match=r"unknown format 'textgrd'; choose one of textgrid, lab \(did you mean: textgrid"):
+        choose("textgrd", ["textgrid", "lab"], "format")

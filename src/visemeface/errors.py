@@ -47,3 +47,16 @@ def close_matches(name: str, known: Iterable[str], n: int = 3) -> str:
     """Return a hint like ``" (did you mean: a, b?)"`` or ``""``."""
     matches = difflib.get_close_matches(name, list(known), n=n, cutoff=0.5)
     return f" (did you mean: {', '.join(matches)}?)" if matches else ""
+
+
+def choose(name: str, known: Iterable[str], what: str, aliases: dict[str, str] | None = None) -> str:
+    """Normalise ``name`` (trimmed, lower case, ``aliases`` applied) and check it is one of ``known``.
+
+    Raises :class:`InputError` "unknown WHAT 'x'; choose one of a, b (did you mean: ...?)".
+    """
+    known = list(known)
+    key = str(name).strip().lower()
+    key = (aliases or {}).get(key, key)
+    if key not in known:
+        raise InputError(f"unknown {what} {name!r}; choose one of {', '.join(known)}{close_matches(key, known)}")
+    return key

@@ -47,7 +47,7 @@ import csv
 import unicodedata
 from functools import lru_cache
 
-from visemeface.errors import InputError, close_matches
+from visemeface.errors import InputError, choose, close_matches
 from visemeface.resources import data_path
 
 __all__ = [
@@ -136,12 +136,7 @@ def alphabet_symbols(alphabet: str) -> tuple[str, ...]:
 
 
 def _canonical(alphabet: str) -> str:
-    name = str(alphabet).strip().lower()
-    name = _ALIASES.get(name, name)
-    if name not in ALPHABETS:
-        raise InputError(f"unknown phone alphabet {alphabet!r}; choose one of "
-                         f"{', '.join(ALPHABETS)}{close_matches(name, ALPHABETS)}")
-    return name
+    return choose(alphabet, ALPHABETS, "phone alphabet", _ALIASES)
 
 
 def to_dectalk(symbol: str, alphabet: str = "dectalk") -> str:

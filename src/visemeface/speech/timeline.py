@@ -74,7 +74,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from visemeface.errors import InputError, close_matches
+from visemeface.errors import InputError, choose, close_matches
 from visemeface.outputs import atomic_output
 from visemeface.postures.phonemes import CLOSURE, DECTALK, LABIODENTAL
 from visemeface.resources import data_path
@@ -244,9 +244,7 @@ def _frame_times(total: float, fps: float) -> np.ndarray:
 
 
 def _speech(segments, visemes, fps, mode, edge):
-    if mode not in MODES:
-        raise InputError(f"unknown interpolation mode {mode!r}; choose one of {', '.join(MODES)}"
-                         f"{close_matches(str(mode), MODES)}")
+    mode = choose(mode, MODES, "interpolation mode")
     if not (isinstance(fps, (int, float)) and math.isfinite(fps) and fps > 0):
         raise InputError(f"frame rate must be positive, got {fps!r}")
     start, end, phones = _check_segments(segments)

@@ -65,7 +65,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from visemeface.errors import InputError, close_matches
+from visemeface.errors import InputError, choose, close_matches
 from visemeface.postures.phonemes import DECTALK, SILENCE, to_dectalk
 
 __all__ = ["FORMATS", "Segments", "detect_format", "make_segments", "parse_transcript",
@@ -285,12 +285,7 @@ def _append(starts, ends, phones, s, e, sym):
 
 
 def _canonical(fmt: str) -> str:
-    name = str(fmt).strip().lower()
-    name = _ALIASES.get(name, name)
-    if name not in FORMATS:
-        raise InputError(f"unknown transcript format {fmt!r}; choose one of {', '.join(FORMATS)}"
-                         f"{close_matches(name, FORMATS)}")
-    return name
+    return choose(fmt, FORMATS, "transcript format", _ALIASES)
 
 
 def _decode(raw: bytes, path) -> str:
