@@ -397,3 +397,73 @@ def test_speak_plain_text_transcript_with_rate(short):
                      "--track", f"t{wpm}.csv", "-q"]) == 0
     slow, fast = len(load_track(short / "t120.csv")), len(load_track(short / "t240.csv"))
     assert 1.3 < slow / fast < 2.2  # twice the rate, about half the time (pauses do not all scale)
+
+
+# ----------------------------------------------------------------------------- --physics sticky|elastic
+# A coarse face (1500 vertices) and a 0.3 s utterance at 64^2: the FEM path stays a few seconds.
+
+TINY = """0.00 0.05 _
+0.05 0.25 aa
+0.25 0.30 _
+"""
+
+
+@pytest.fixture
+def coarse_rig(monkeypatch):
+    from visemeface.muscles import rig as rig_mod
+    from visemeface.physics.tled import set_threads
+
+    set_threads(1)
+    coarse = rig_mod.default_rig(resolution=1500)
+    monkeypatch.setattr(rig_mod, "default_rig", lambda resolution=None: coarse)
+    return coarse
+
+
+def test_speak_physics_frames_come_from_the_fem_face(short, capsys, coarse_rig):
+    (short / "tiny.txt").write_text(TINY)
+    code = main(["speak", "tiny.txt", "--size", "64", "--msaa", "0", "--physics", "elastic",
+                 "--pc2", "e.pc2", "--track", "e.csv", "-q"])
+    assert code == 0, capsys.readouterr().err
+    code = main(["speak", "tiny.txt", "--size", "64", "--msaa", "0", "--no-video", "--pc2", "k.pc2", "-q"])
+    assert code == 0, capsys.readouterr().err
+    from visemeface.physics.face_model import build_fem_face
+
+    fem = build_fem_face(coarse_rig.face)
+    pts, _ = export.read_pc2(short / "e.pc2")
+    kin, _ = export.read_pc2(short / "k.pc2")
+    n = round(0.3 * 30)
+    assert pts.shape == kin.shape == (n, coarse_rig.face.n_vertices, 3)
+    assert (short / "tiny.mp4").exists() and export.read_video_info(short / "tiny.mp4")["n_frames"] == n
+    # the FEM frames are not the rig's poses (a simulation ran), yet follow them: the mouth
+    # opens on /aa/ by about as much
+    assert np.abs(pts - kin).max() > 1e-6
+    up, lo = coarse_rig.face.landmarks["upper_lip_mid"], coarse_rig.face.landmarks["lower_lip_mid"]
+    gap_fem, gap_kin = pts[:, up, 1] - pts[:, lo, 1], kin[:, up, 1] - kin[:, lo, 1]
+    i = int(np.argmax(gap_kin))
+    assert gap_kin[i] > 0.004 and abs(gap_fem[i] - gap_kin[i]) < 0.25 * gap_kin[i]
+    assert abs(gap_fem[0] - gap_kin[0]) < 5e-4          # starts in the first frame's posture
+    lips = np.unique(np.concatenate([coarse_rig.face.region("upper_lip"), coarse_rig.face.region("lower_lip")]))
+    rms = np.sqrt(np.mean(np.sum((pts[i, lips] - kin[i, lips]) ** 2, axis=1))) / fem.mouth_width
+    assert rms < 0.05
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--physics", "sticky", "--moisture", "-1"], "--moisture must be >= 0"),
+    (["--physics", "sticky", "--evaporation", "-2"], "--evaporation must be >= 0"),
+    (["--physics", "sticky", "--glue", "-0.1"], "--glue must be >= 0"),
+    (["--glue", "0.1"], "--glue needs --physics sticky or elastic"),
+    (["--physics", "sticky", "--glue-profile", "0.95..0.99=1"], "names no saliva element"),
+])
+def test_speak_physics_bad_input_exits_2_before_simulating(short, capsys, coarse_rig, monkeypatch, extra,
+                                                           message):
+    from visemeface.physics import drive
+
+    def no_frames(self, start=None):
+        raise AssertionError("simulated despite bad input")
+
+    monkeypatch.setattr(drive.StickySimulation, "frames", no_frames)
+    (short / "tiny.txt").write_text(TINY)
+    code = main(["speak", "tiny.txt", "--size", "64"] + extra)
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and err.count("\n") == 1
+    assert not (short / "tiny.mp4").exists()

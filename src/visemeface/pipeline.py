@@ -390,7 +390,7 @@ class RenderSettings:
 
 
 def animate(track: pd.DataFrame, rig, out: Outputs, settings: RenderSettings,
-            end_time: float | None = None) -> dict:
+            end_time: float | None = None, poses=None, poses_key: str = "") -> dict:
     """Pose, render and export every frame of ``track``, streaming.
 
     Parameters
@@ -405,6 +405,14 @@ def animate(track: pd.DataFrame, rig, out: Outputs, settings: RenderSettings,
         Frame size, view, frame rate, audio to mux.
     end_time : float, optional
         End of the utterance (s), where the glTF animation ends.
+    poses : iterator of (N, 3) arrays, optional
+        The vertices of each frame, in order, instead of ``rig.pose`` of each
+        row: e.g. :func:`visemeface.physics.drive.simulate_track` for
+        ``--physics sticky|elastic``. It is advanced once per frame, also for
+        frames kept by ``--resume`` (a simulation has to pass through them).
+    poses_key : str
+        What ``poses`` depends on beyond the track (physics settings), part of
+        the frames' render key.
 
     Returns
     -------
@@ -423,7 +431,8 @@ def animate(track: pd.DataFrame, rig, out: Outputs, settings: RenderSettings,
     need_image = out.video is not None or out.frames is not None
     frames = None
     if out.frames is not None:
-        frames = FrameFolder(out.frames, render_key(rig, a, settings.size, f"{settings.view}/msaa{settings.msaa}"),
+        frames = FrameFolder(out.frames, render_key(rig, a, settings.size,
+                                              f"{settings.view}/msaa{settings.msaa}{poses_key}"),
                              resume=out.resume, force=out.force)
         frames.check()
 
@@ -448,11 +457,14 @@ def animate(track: pd.DataFrame, rig, out: Outputs, settings: RenderSettings,
             pc2 = stack.enter_context(export.Pc2Writer(out.pc2, len(face.vertices), force=out.force))
         if frames is not None:
             stack.enter_context(frames)
-        bar = progress(range(n), total=n, desc="rendering") if settings.show_progress else range(n)
+        desc = "rendering" if poses is None else "simulating"
+        bar = progress(range(n), total=n, desc=desc) if settings.show_progress else range(n)
         for i in bar:
             kept = frames is not None and frames.has(i)
             verts = None
-            if obj is not None or pc2 is not None or (renderer is not None and not kept):
+            if poses is not None:
+                verts = np.asarray(next(poses))
+            elif obj is not None or pc2 is not None or (renderer is not None and not kept):
                 verts = np.asarray(rig.pose(a[i]))
             if need_image:
                 image = frames.read(i, (settings.size, settings.size, 3)) if kept else None

@@ -7,11 +7,13 @@ The render and export options are shared with ``visemeface say`` (text in):
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from pathlib import Path
 
 ORDER = 20
 
 VIEWS = ("face", "mouth", "three-quarter")
+PHYSICS = ("sticky", "elastic")
 INTERPOLATIONS = ("coarticulation", "linear", "cosine")
 FORMATS = ("auto", "timed", "lab", "phn", "textgrid", "mfa-json", "mfa-csv", "dectalk", "text")
 
@@ -41,6 +43,15 @@ def add_render_arguments(p: argparse.ArgumentParser) -> None:
     anim.add_argument("--fps", type=float, default=30.0, help="frame rate (default 30)")
     anim.add_argument("--audio", type=Path, metavar="WAV",
                       help="sound to mux into the MP4 (starts at t=0; padded or cut to the animation)")
+    phys = p.add_argument_group("physics (sticky lips: a finite-element lower face, saliva between the lips)")
+    phys.add_argument("--physics", choices=("none",) + PHYSICS, default="none",
+                      help="none (default): the kinematic rig; sticky: FEM face whose lips stick and "
+                      "unzip from the centre; elastic: the same FEM without glue (much slower than none)")
+    phys.add_argument("--glue", type=float, metavar="G", help="glue strength K_glue (default 0.08)")
+    phys.add_argument("--glue-profile", metavar="SPEC", help="glue across the mouth over --glue, e.g. "
+                      "centre=0.18 or right=0.3,left=0 (WHERE: centre, left, right, corners, all, a..b)")
+    phys.add_argument("--moisture", type=float, metavar="M", help="initial saliva moisture 0M (default 100)")
+    phys.add_argument("--evaporation", type=float, metavar="E", help="moisture lost per second (default 0)")
     ren = p.add_argument_group("rendering")
     ren.add_argument("--size", type=int, default=512, help="frame width = height in pixels, a multiple "
                      "of 16 (default 512)")
@@ -90,7 +101,38 @@ def check_early(args, default_video: Path):
         check_audio(args.audio)
     settings = RenderSettings(size=args.size, view=args.view, msaa=args.msaa, fps=args.fps, audio=args.audio,
                               show_progress=not args.quiet)
+    args.physics_settings = physics_settings(args)
     return out, settings
+
+
+def physics_settings(args):
+    """PhysicsSettings of ``--physics``/``--glue``/... (checked), or None for the kinematic path."""
+    from visemeface.errors import InputError
+
+    given = [f"--{n.replace('_', '-')}" for n in ("glue", "glue_profile", "moisture", "evaporation")
+             if getattr(args, n, None) is not None]
+    physics = getattr(args, "physics", "none")
+    if physics == "none":
+        if given:
+            raise InputError(f"{given[0]} needs --physics sticky or elastic")
+        return None
+    from visemeface.physics.drive import PhysicsSettings
+    from visemeface.physics.saliva import GLUE, SalivaParams
+
+    glue = GLUE if args.glue is None else args.glue
+    if not (glue >= 0 and glue < float("inf")):
+        raise InputError(f"--glue must be >= 0, got {glue:g}")
+    params = {}
+    if args.moisture is not None:
+        params["initial_moisture"] = args.moisture
+    if args.evaporation is not None:
+        params["evaporation"] = args.evaporation
+    try:
+        saliva = dataclasses.replace(SalivaParams(), **params)
+    except InputError as e:
+        raise InputError(str(e).replace("moisture must", "--moisture must")
+                         .replace("evaporation rate must", "--evaporation must")) from None
+    return PhysicsSettings(glue=glue, glue_profile=args.glue_profile, saliva=saliva)
 
 
 def render_segments(segments, args, out, settings) -> int:
@@ -115,7 +157,18 @@ def render_segments(segments, args, out, settings) -> int:
             what = "padded with silence" if audio_s < video_s else "cut"
             warnings.warn(f"{settings.audio}: the audio lasts {audio_s:.2f} s, the animation {video_s:.2f} s; "
                           f"the audio is {what} to the animation", stacklevel=2)
-    stats = animate(track, rig, out, settings, end_time=float(segments["end"].iloc[-1]))
+    poses, key = None, ""
+    physics = getattr(args, "physics_settings", None)
+    if physics is not None:
+        # Build the FEM face and check glue profile, time step etc. before any simulation.
+        from visemeface.physics.drive import StickySimulation
+        from visemeface.physics.face_model import build_fem_face
+
+        sim = StickySimulation(build_fem_face(rig.face), rig, track, physics=args.physics, settings=physics)
+        poses = (fr.display for fr in sim.frames())
+        key = f"/{args.physics}/{sim.fingerprint()}"
+    stats = animate(track, rig, out, settings, end_time=float(segments["end"].iloc[-1]), poses=poses,
+                    poses_key=key)
     if not args.quiet:
         written = [str(p) for p in out.paths().values()]
         extra = f", {stats['kept']} kept from the previous run" if stats["kept"] else ""
