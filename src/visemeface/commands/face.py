@@ -39,23 +39,6 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-def parse_size(text: str) -> tuple[int, int]:
-    """``"512"`` -> (512, 512); ``"640x480"`` -> (640, 480); InputError otherwise."""
-    from visemeface.errors import InputError
-
-    parts = str(text).lower().split("x")
-    try:
-        vals = [int(v) for v in parts]
-    except ValueError:
-        vals = []
-    if len(vals) not in (1, 2):
-        raise InputError(f"--size must be N or WxH in pixels, got {text!r}")
-    w, h = (vals[0], vals[0]) if len(vals) == 1 else vals
-    if min(w, h) < 16 or max(w, h) > 4096 or w % 16 or h % 16:
-        raise InputError(f"--size must be multiples of 16 from 16 to 4096, got {text!r}")
-    return w, h
-
-
 def run(args) -> int:
     import json
     from pathlib import Path
@@ -70,6 +53,8 @@ def run(args) -> int:
         raise InputError("--resolution applies to the embedded face, not to --mesh")
     if args.landmarks and not args.mesh:
         raise InputError("--landmarks needs --mesh")
+    from visemeface.render.renderer import parse_size
+
     size = parse_size(args.size)
     outputs = [Path(p) for p in (args.output, args.camera_json) if p]
     if args.export:

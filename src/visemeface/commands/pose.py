@@ -59,21 +59,6 @@ def parse_assignments(items, option: str) -> dict[str, float]:
     return out
 
 
-def parse_size(text: str) -> tuple[int, int]:
-    from visemeface.errors import InputError
-
-    parts = text.lower().split("x")
-    try:
-        nums = [int(p) for p in parts]
-    except ValueError:
-        raise InputError(f"--size expects W or WxH in pixels, got {text!r}") from None
-    if len(nums) == 1:
-        nums = nums * 2
-    if len(nums) != 2 or min(nums) < 16 or any(n % 16 for n in nums):
-        raise InputError(f"--size must be W or WxH with multiples of 16, got {text!r}")
-    return nums[0], nums[1]
-
-
 def build_rig(args):
     """The rig of ``--face``/``--rig`` (default face and rig file)."""
     from visemeface.muscles.rig import MuscleRig, default_rig
@@ -114,6 +99,8 @@ def run(args) -> int:
     from visemeface.render.renderer import Renderer, save_png
 
     check_new(args.output, args.force)
+    from visemeface.render.renderer import parse_size
+
     size = parse_size(args.size)
     sets = parse_assignments(args.sets, "--set")
     emotions = parse_assignments(args.emotions, "--emotion")

@@ -127,6 +127,21 @@ def _check_size(size) -> tuple[int, int]:
     return w, h
 
 
+def parse_size(text: str) -> tuple[int, int]:
+    """A ``--size`` option: ``"512"`` -> (512, 512), ``"640x480"`` -> (640, 480); InputError otherwise."""
+    parts = str(text).lower().split("x")
+    try:
+        vals = [int(v) for v in parts]
+    except ValueError:
+        vals = []
+    if len(vals) not in (1, 2):
+        raise InputError(f"--size must be N or WxH in pixels, got {text!r}")
+    try:
+        return _check_size(vals[0] if len(vals) == 1 else vals)
+    except InputError:
+        raise InputError(f"--size must be multiples of 16 from 16 to 4096, got {text!r}") from None
+
+
 class Renderer:
     """Offscreen renderer for one face topology.
 
