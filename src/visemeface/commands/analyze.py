@@ -114,11 +114,13 @@ def run(args) -> int:
     with contextlib.ExitStack() as stack:
         on_frame = None
         if args.overlay:
+            from visemeface.render.export import frame_name
+
             overlay_dir = stack.enter_context(atomic_dir(args.overlay, args.force))
 
             def on_frame(i, frame, openings):
                 img = draw_openings(frame, openings, box, f"frame {i}")[y0:y1, x0:x1]
-                if not cv2.imwrite(str(overlay_dir / f"frame_{i:05d}.png"), cv2.cvtColor(img, cv2.COLOR_RGB2BGR)):
+                if not cv2.imwrite(str(overlay_dir / frame_name(i)), cv2.cvtColor(img, cv2.COLOR_RGB2BGR)):
                     raise InputError("cannot write overlay frame", overlay_dir)
 
         frames = progress(source.frames(), total=source.n_frames, desc="analyze")
