@@ -371,3 +371,27 @@ def test_a_track_that_starts_mid_gesture_starts_in_that_posture(model):
         got = fr.vertices - fem.face.vertices
         assert np.abs(got - kin)[fem.surface_vertices].max() < 0.02 * fem.mouth_width
     assert np.abs(frames[-1].velocity).max() < 0.01          # at rest, not thrown from the rest face
+
+
+def test_untangle_lifts_crushed_target_elements_and_keeps_the_rest(model):
+    from visemeface.physics.saliva import deformation_gradient, hex_centre_gradients
+    fem, rig = model
+    track = _ramp(rig, fps=100, hold=0.0)
+    sim = drive.StickySimulation(fem, rig, track, physics="elastic")
+    d = sim.drive
+    hx = fem.mesh.hexes[fem.tissue]
+    G = hex_centre_gradients(fem.mesh.nodes[hx])
+    U = d.kinematic_field(sim.values[-1])
+    J = np.linalg.det(deformation_gradient(U[hx], G))
+    assert J.min() >= d.min_jacobian
+    # fold one lip element inside out: push its front nodes through its back ones
+    e = int(np.argmin(np.abs(fem.mesh.nodes[hx].mean(axis=1)[:, 0])))   # a central element
+    bad = U.copy()
+    front, back = hx[e, 4:], hx[e, :4]
+    bad[front] += 1.5 * (fem.mesh.nodes[back] - fem.mesh.nodes[front])
+    assert np.linalg.det(deformation_gradient(bad[hx], G)).min() < 0
+    fixed = d.untangle(bad)
+    Jf = np.linalg.det(deformation_gradient(fixed[hx], G))
+    assert Jf.min() >= d.min_jacobian
+    far = np.linalg.norm(fem.mesh.nodes - fem.mesh.nodes[front].mean(axis=0), axis=1) > 0.02
+    np.testing.assert_array_equal(fixed[far], bad[far])       # a local repair

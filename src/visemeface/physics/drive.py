@@ -152,8 +152,10 @@ class FaceDrive:
         ``u (n, 3) -> (n, 3)`` internal forces of the tissue elements alone.
     """
 
-    def __init__(self, fem, rig, values, fps: float, tissue_forces, field_smoothing: int = 0):
+    def __init__(self, fem, rig, values, fps: float, tissue_forces, field_smoothing: int = 0,
+                 min_jacobian: float = 0.0):
         self.fem, self.rig = fem, rig
+        self.min_jacobian = float(min_jacobian)
         self.field_smoothing = int(field_smoothing)
         self.values = np.asarray(values, dtype=np.float64)
         self.fps = float(fps)
@@ -206,7 +208,50 @@ class FaceDrive:
         bone = self.bone_displacement(float(np.asarray(a)[self._jaw_col]))
         lam = self._lip[:, None]
         bone = (1.0 - lam) * bone + lam * surf
-        return np.concatenate([(1.0 - w[:, None]) * surf + w[:, None] * bone for w in fem.depth_fraction])
+        U = np.concatenate([(1.0 - w[:, None]) * surf + w[:, None] * bone for w in fem.depth_fraction])
+        return self.untangle(U) if self.min_jacobian > 0 else U
+
+    def untangle(self, U, iterations: int = 200) -> np.ndarray:
+        """Relax a target field where it crushes or inverts tissue elements.
+
+        At wide openings the rig's surface field folds the lower lip over itself at
+        the mouth corners (neighbouring vertices cross, J ≤ 0): no simulation can
+        reach that target, and the loads F_int(U) of a crushed element are huge and
+        unstable. Each pass moves the nodes of the elements with
+        J = det(I + ∇U) < ``min_jacobian`` (element centre) halfway to the mean of
+        their neighbours' displacement (Laplacian smoothing of the field), the
+        skull fixed; it stops when every element reaches the bound. Elsewhere
+        the field is the rig's exactly.
+        """
+        if not hasattr(self, "_adj"):
+            import scipy.sparse as sp
+
+            from visemeface.physics.saliva import hex_centre_gradients
+            hx = self.fem.mesh.hexes[self.fem.tissue]
+            self._hx = hx
+            self._G = hex_centre_gradients(self.fem.mesh.nodes[hx])
+            n = self.fem.mesh.n_nodes
+            r = np.repeat(hx, 8, axis=1).ravel()
+            c = np.tile(hx, (1, 8)).ravel()
+            A = sp.csr_matrix((np.ones(len(r)), (r, c)), shape=(n, n))
+            A.setdiag(0)
+            A.eliminate_zeros()
+            A.data[:] = 1.0
+            self._adj = A
+            self._deg = np.asarray(A.sum(axis=1)).ravel()
+            self._movable = np.ones(n, dtype=bool)
+            self._movable[self.fixed_nodes] = False
+        from visemeface.physics.saliva import deformation_gradient
+        U = np.array(U, dtype=np.float64)
+        for _ in range(iterations):
+            J = np.linalg.det(deformation_gradient(U[self._hx], self._G))
+            bad = J < self.min_jacobian
+            if not bad.any():
+                break
+            move = np.unique(self._hx[bad])
+            move = move[self._movable[move]]
+            U[move] = 0.5 * (U[move] + (self._adj[move] @ U) / self._deg[move, None])
+        return U
 
     def _smooth(self, field):
         """Average the surface field with its quad neighbours (``field_smoothing`` passes).
@@ -263,6 +308,17 @@ class FaceDrive:
         self._fbuf += fa
         return self._fbuf
 
+    def target(self, t: float) -> np.ndarray:
+        """The kinematic field U (n, 3) at time ``t``, linear between frames."""
+        w = self._interval(t)
+        if getattr(self, "_tseg", None) is None or self._tseg[0] != self._i:
+            ua, ub = self.keyframe(self._i)[2], self.keyframe(self._i + 1)[2]
+            self._tseg = (self._i, ua, ub - ua, np.empty_like(ua))
+        _, ua, du, buf = self._tseg
+        np.multiply(du, w, out=buf)
+        buf += ua
+        return buf
+
     def jaw(self, t: float) -> np.ndarray:
         """Prescribed jaw-node displacements at time ``t``, linear between frames."""
         w = self._interval(t)
@@ -275,6 +331,11 @@ class FaceDrive:
 # --------------------------------------------------------------------------- the simulation
 
 PHYSICS = ("sticky", "elastic")
+#: Frequency (Hz) of the mass-proportional spring that holds each free node
+#: toward its kinematic position (see :class:`PhysicsSettings`).
+TRACKING_HZ = 0.0
+#: Least volume ratio J of a tissue element in the drive's target (see :meth:`FaceDrive.untangle`).
+MIN_JACOBIAN = 0.3
 
 
 @dataclass(frozen=True)
@@ -293,6 +354,9 @@ class PhysicsSettings:
     glue_profile: str | None = None
     glue_file: str | None = None
     saliva: SalivaParams = field(default_factory=SalivaParams)
+    tracking: float = TRACKING_HZ
+    field_smoothing: int = 0
+    min_jacobian: float = MIN_JACOBIAN
 
 
 @dataclass
@@ -364,13 +428,15 @@ class StickySimulation:
         tissue_mesh = HexMesh(mesh.nodes, mesh.hexes[fem.tissue], material=np.zeros(len(fem.tissue), np.int64))
         self._tissue = TLEDSolver(tissue_mesh, SOFT_TISSUE, dt=min(self.dt, settings.dt),
                                   damping=settings.damping, hourglass_kappa=settings.hourglass_kappa)
-        self.drive = FaceDrive(fem, rig, self.values, self.fps, self._tissue.internal_forces)
+        self.drive = FaceDrive(fem, rig, self.values, self.fps, self._tissue.internal_forces,
+                               field_smoothing=settings.field_smoothing, min_jacobian=settings.min_jacobian)
         self.solver = _FaceSolver(
             mesh, [SOFT_TISSUE, SALIVA], dt=self.dt, damping=settings.damping,
             hourglass_kappa=settings.hourglass_kappa, fixed=self.drive.fixed_nodes,
             prescribed=[(self.drive.jaw_nodes, self.drive.jaw)],
             forces=[(np.arange(mesh.n_nodes), self.drive.force)],
-            element_hook=self.saliva.hook(fem.saliva), unchecked=fem.saliva)
+            element_hook=self.saliva.hook(fem.saliva), unchecked=fem.saliva,
+            tracking=(settings.tracking, self.drive.target))
         self.rest_gaps = fem.rest_gaps
 
     @property
@@ -447,7 +513,7 @@ class StickySimulation:
 class _FaceSolver:
     """Factory of :class:`~visemeface.physics.tled.TLEDSolver` that leaves given elements unchecked."""
 
-    def __new__(cls, *args, unchecked=(), **kwargs):
+    def __new__(cls, *args, unchecked=(), tracking=(0.0, None), **kwargs):
         from visemeface.physics.tled import TLEDSolver
 
         class FaceSolver(TLEDSolver):
@@ -470,7 +536,24 @@ class _FaceSolver:
                 finally:
                     self._jac = jac
 
+            def _element_forces(self, u, want_energy):
+                self._u_now = u
+                super()._element_forces(u, want_energy)
+
+            def _external(self, t):
+                R = super()._external(t)
+                if self._track_k is not None:
+                    # R was copied fresh from the drive's buffer: add k (U(t) - u).
+                    R += self._track_k * (self._track_target(t) - self._u_now)
+                return R
+
         solver = FaceSolver(*args, **kwargs)
+        hz, target = tracking
+        solver._track_k = None
+        if hz and hz > 0:
+            k = solver.mass * (2.0 * np.pi * float(hz)) ** 2
+            solver._track_k = k[:, None] * solver.free.reshape(len(k), -1)[:, :1]
+            solver._track_target = target
         solver._unchecked = np.asarray(unchecked, dtype=np.int64)
         checked = np.setdiff1d(np.arange(solver.mesh.n_elements), solver._unchecked)
         contiguous = len(checked) and checked[-1] - checked[0] + 1 == len(checked)

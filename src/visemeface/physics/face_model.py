@@ -33,7 +33,7 @@ import numpy as np
 
 from visemeface.errors import InputError
 from visemeface.face.mesh import FaceMesh
-from visemeface.physics.hexmesh import HexMesh, extrude_quads, vertex_normals
+from visemeface.physics.hexmesh import HexMesh, element_quality, extrude_quads, vertex_normals
 
 TISSUE = 0
 SALIVA = 1
@@ -46,6 +46,10 @@ SALIVA_DEPTH = 0.001
 #: Depth (m) of the tissue under the lips: their bone side is the teeth and
 #: gums, closer than the cheeks' and chin's.
 LIP_THICKNESS = 0.004
+#: Smoothing passes of the lips' depth into the cheeks' (element shape at the mouth corners).
+DEPTH_SMOOTHING = 2
+#: Bone-side node relaxation target (least scaled Jacobian of a tissue hexahedron).
+BONE_QUALITY = 0.4
 #: Default rest gap between the lips that the saliva fills (m).
 REST_GAP = 0.001
 #: Regions never part of the FEM (they stay kinematic).
@@ -369,7 +373,11 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
                 lips[face.regions[name]] = True
         depth[lips] = lip_thickness
         lip_w = _smooth_on_quads(lips.astype(np.float64), quads, passes=2)
-        depth = thickness + (lip_thickness - thickness) * lip_w
+        # The depth changes three-fold from lips to cheeks: spread that change over
+        # more elements than the lip weight, or the mouth corners' deep hexahedra
+        # come out nearly flat (scaled Jacobian ~0.05) and invert on wide openings.
+        depth_w = _smooth_on_quads(lips.astype(np.float64), quads, passes=DEPTH_SMOOTHING)
+        depth = thickness + (lip_thickness - thickness) * depth_w
     tissue = extrude_quads(face.vertices, quads, depth, layers=layers, material=TISSUE, normals=normals,
                            check=False)
     S = len(tissue.surface_vertices)
@@ -384,6 +392,8 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
         depth_fraction = np.stack([d[:, 0] for d in fr]) / t_s[:, 0]
     else:
         depth_fraction = np.repeat(np.linspace(0.0, 1.0, layers + 1)[:, None], S, axis=1)
+    if layers >= 2:
+        tissue.nodes = relax_bone_side(tissue.nodes, tissue.hexes, S, layers)
     saliva_layers = 1 if (saliva_depth is not None and layers >= 2) else layers
     node_of = np.full(face.n_vertices, -1, dtype=np.int64)
     node_of[tissue.surface_vertices] = np.arange(S)
@@ -423,6 +433,59 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
                    saliva_s=np.tile(0.5 * (seam_s[a] + seam_s[b]), saliva_layers),
                    seam_pairs=pairs, seam_s=seam_s, mouth_width=width,
                    depth_fraction=depth_fraction, lip_weight=lip_w[tissue.surface_vertices])
+
+
+def relax_bone_side(nodes, hexes, S: int, layers: int, q_min: float = BONE_QUALITY,
+                    iterations: int = 60) -> np.ndarray:
+    """Move bone-side nodes of badly shaped hexahedra toward their neighbours' mean.
+
+    Where the surface is concave (the mouth corners) the extrusion normals
+    converge and the bone-side nodes of neighbouring columns bunch up: hexahedra
+    come out nearly flat (scaled Jacobian ~0.05,
+    :func:`~visemeface.physics.hexmesh.element_quality`) and a
+    wide jaw opening turns them inside out. The bone side is not seen; each pass
+    moves the bone-side nodes of elements with quality < ``q_min`` halfway to the
+    mean of their bone-side neighbours (Laplacian smoothing), the skin and the
+    saliva layer stay put. Stops when every element reaches ``q_min`` or the
+    worst one stops improving.
+    """
+    nodes = np.array(nodes, dtype=np.float64)
+    hexes = np.asarray(hexes, dtype=np.int64)
+    inner = layers * S
+    # bone-side neighbours: nodes sharing a hexahedron face on the bone side
+    rows, cols = [], []
+    for h in hexes:
+        b = h[h >= inner]
+        for x in b:
+            for y in b:
+                if x != y:
+                    rows.append(x)
+                    cols.append(y)
+    if not rows:
+        return nodes
+    import scipy.sparse as sp
+    n = len(nodes)
+    A = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
+    A.data[:] = 1.0
+    deg = np.asarray(A.sum(axis=1)).ravel()
+    def quality(x):
+        return element_quality(HexMesh(x, hexes))["scaled_jacobian"]
+
+    q = quality(nodes)
+    for _ in range(iterations):
+        bad = q < q_min
+        if not bad.any():
+            break
+        move = np.unique(hexes[bad])
+        move = move[(move >= inner) & (deg[move] > 0)]
+        mean = (A[move] @ nodes) / deg[move, None]
+        trial = nodes.copy()
+        trial[move] = 0.5 * (nodes[move] + mean)
+        q_new = quality(trial)
+        if q_new.min() <= q.min():
+            break
+        nodes, q = trial, q_new
+    return nodes
 
 
 def seam_openings(fem: FEMFace, vertices, rest_gaps=None, threshold: float = 0.02) -> dict:
