@@ -2,6 +2,7 @@
 
     PYTHONPATH=src python scripts/sticky_figures.py              # default face, ~15-25 min on 2 busy cores
     PYTHONPATH=src python scripts/sticky_figures.py --resolution 1500 --only zipper,merge
+    PYTHONPATH=src python scripts/sticky_figures.py --only calibration --calibration-tracking 1000
 
 Figures
 -------
@@ -15,6 +16,8 @@ equilibrium  RMS lip difference sticky vs elastic once open wide (target <= 1 %)
 merge        central glue 0.18: opening count 2 -> 1 and the width jump at the merge
 asymmetry    one-sided activation and one-sided glue: which side opens first
 evaporation  the "open" scenario twice with evaporation: jaw at saliva failure, 1st vs 2nd opening
+speech       the 3 s example as `speak --physics` runs it (tracking spring 1000 Hz), sticky and elastic:
+             completes without inversion? lip RMS vs the kinematic posture per frame; and without tracking
 Pictures go to docs/images/sticky_*.png.
 """
 
@@ -65,7 +68,7 @@ def fig_counts(fem):
     emit(figure="counts", **fem.counts(), seed_nodes=6982, seed_hexahedra=3414)
 
 
-def fig_calibration(fem, rig, fps=400):
+def fig_calibration(fem, rig, fps=400, tracking=0.0):
     from visemeface.postures.library import load_visemes
     table = load_visemes()
     lips = lip_ids(fem)
@@ -75,17 +78,17 @@ def fig_calibration(fem, rig, fps=400):
         extra = {k: float(v) for k, v in row.items() if k != "jaw" and v != 0}
         tr = ramp(rig, fps, start=0.0, ramp_s=0.08, hold=0.17, jaw=float(row.get("jaw", 0.0)), extra=extra)
         try:
-            sim, frames = run(fem, rig, tr, physics="elastic")
+            sim, frames = run(fem, rig, tr, physics="elastic", tracking=tracking)
         except Exception as e:
             diverged.append(sym)
-            emit(figure="calibration", viseme=sym, error=f"{type(e).__name__}: {str(e)[:160]}")
+            emit(figure="calibration", viseme=sym, tracking_hz=tracking, error=f"{type(e).__name__}: {str(e)[:160]}")
             continue
         kin = rig.pose(sim.values[-1]) - rig.face.vertices
         got = frames[-1]["v"] - fem.face.vertices
         errs[sym] = float(np.sqrt(np.mean(np.sum((got[lips] - kin[lips]) ** 2, axis=1))) / fem.mouth_width)
-        emit(figure="calibration", viseme=sym, rms_mouth_widths=round(errs[sym], 5))
+        emit(figure="calibration", viseme=sym, tracking_hz=tracking, rms_mouth_widths=round(errs[sym], 5))
     e = np.array(list(errs.values()))
-    emit(figure="calibration_summary", visemes=len(e), median=round(float(np.median(e)), 5),
+    emit(figure="calibration_summary", tracking_hz=tracking, visemes=len(e), median=round(float(np.median(e)), 5),
          max=round(float(e.max()), 5), worst=max(errs, key=errs.get), target=0.05,
          within_target=int((e <= 0.05).sum()), diverged=diverged)
 
@@ -193,11 +196,45 @@ def fig_evaporation(fem, rig, evaporation=40.0):
         emit(figure="evaporation", evaporation_per_s=phi, openings=out)
 
 
+def fig_speech(fem, rig):
+    """The 3 s example as ``speak --physics sticky|elastic`` runs it: completes? lip RMS vs kinematic."""
+    from visemeface.postures.library import load_visemes
+    from visemeface.resources import transcripts_path
+    from visemeface.speech.timeline import activation_track
+    from visemeface.speech.transcripts import read_transcript
+    segments = read_transcript(transcripts_path("one_five_zero_zero_six.txt"))
+    ranges = {n: tuple(r) for n, r in zip(rig.names, rig.ranges)}
+    track = activation_track(segments, load_visemes(rig=rig), fps=30, ranges=ranges)
+    lips = lip_ids(fem)
+    for tracking in (drive.SPEECH_TRACKING_HZ, 0.0):
+        for physics in ("sticky", "elastic"):
+            t0 = time.perf_counter()
+            rms, error = [], None
+            try:
+                sim, frames = run(fem, rig, track, physics=physics, tracking=tracking)
+                for f in frames:
+                    kin = rig.pose(sim.values[f["i"]]) - rig.face.vertices
+                    got = f["v"] - fem.face.vertices
+                    rms.append(float(np.sqrt(np.mean(np.sum((got[lips] - kin[lips]) ** 2, axis=1)))))
+            except Exception as e:
+                error = f"{type(e).__name__}: {str(e)[:160]}"
+            rms = np.array(rms) / fem.mouth_width
+            emit(figure="speech", physics=physics, tracking_hz=tracking, frames=len(track), completed=error is None,
+                 error=error, lip_rms_vs_kinematic_max=round(float(rms.max()), 4) if len(rms) else None,
+                 lip_rms_vs_kinematic_median=round(float(np.median(rms)), 4) if len(rms) else None,
+                 wall_s=round(time.perf_counter() - t0, 1))
+            if tracking == 0.0:
+                break          # without tracking: only show that it fails (and where)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--resolution", type=int, help="face vertices (default: the default face)")
     ap.add_argument("--calibration-resolution", type=int, default=1500,
                     help="face for the 56-viseme calibration sweep (default 1500: coarse, fast)")
+    ap.add_argument("--calibration-tracking", type=float, default=0.0,
+                    help="tracking spring (Hz) in the calibration sweep (default 0: dead loads only; "
+                    "speak --physics uses %g)" % drive.SPEECH_TRACKING_HZ)
     ap.add_argument("--only", help="comma-separated figures")
     ap.add_argument("--threads", type=int, default=None)
     args = ap.parse_args(argv)
@@ -211,8 +248,9 @@ def main(argv=None):
     t0 = time.perf_counter()
     for name, fn in (("counts", lambda: fig_counts(fem)), ("zipper", lambda: fig_zipper(fem, rig)),
                      ("merge", lambda: fig_merge(fem, rig)), ("asymmetry", lambda: fig_asymmetry(fem, rig)),
-                     ("evaporation", lambda: fig_evaporation(fem, rig)),
-                     ("calibration", lambda: fig_calibration(*_coarse(args.calibration_resolution)))):
+                     ("evaporation", lambda: fig_evaporation(fem, rig)), ("speech", lambda: fig_speech(fem, rig)),
+                     ("calibration", lambda: fig_calibration(*_coarse(args.calibration_resolution),
+                                                             tracking=args.calibration_tracking))):
         if only is None or name in only:
             try:
                 fn()
