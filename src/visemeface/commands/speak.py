@@ -45,8 +45,9 @@ def add_render_arguments(p: argparse.ArgumentParser) -> None:
                       help="sound to mux into the MP4 (starts at t=0; padded or cut to the animation)")
     phys = p.add_argument_group("physics (sticky lips: a finite-element lower face, saliva between the lips)")
     phys.add_argument("--physics", choices=("none",) + PHYSICS, default="none",
-                      help="none (default): the kinematic rig; sticky: FEM face whose lips stick and "
-                      "unzip from the centre; elastic: the same FEM without glue (much slower than none)")
+                      help="none (default): the kinematic rig; sticky: the FEM face with saliva that glues "
+                      "the lips until it breaks; elastic: the same FEM without glue (both slow: about a minute "
+                      "per second of speech on one core)")
     phys.add_argument("--glue", type=float, metavar="G", help="glue strength K_glue (default 0.08)")
     phys.add_argument("--glue-profile", metavar="SPEC", help="glue across the mouth over --glue, e.g. "
                       "centre=0.18 or right=0.3,left=0 (WHERE: centre, left, right, corners, all, a..b)")
