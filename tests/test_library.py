@@ -277,3 +277,10 @@ def test_keep_contact_closes_a_surprised_bilabial_with_the_jaw_only(rig):
     pd.testing.assert_series_equal(lib.blend("p", {}, rig=rig, keep_contact=True), lib.blend("p", {}, rig=rig))
     np.testing.assert_allclose(lib.posed_vertices(rig, "m", {"surprise": 1.0}, keep_contact=True),
                                rig.pose(kept.to_numpy()))
+
+
+def test_empty_table_file_is_a_one_line_error(tmp_path):
+    p = tmp_path / "empty.csv"
+    p.write_bytes(b"")
+    with pytest.raises(InputError, match="not a readable CSV"):
+        lib.load_visemes(p)

@@ -60,3 +60,13 @@ def test_choose_normalises_and_suggests():
     assert choose("tg", ["textgrid"], "format", aliases={"tg": "textgrid"}) == "textgrid"
     with pytest.raises(InputError, match=r"unknown format 'textgrd'; choose one of textgrid, lab \(did you mean: textgrid"):
         choose("textgrd", ["textgrid", "lab"], "format")
+
+
+def test_output_under_a_file_is_a_one_line_error(tmp_path):
+    (tmp_path / "file.bin").write_bytes(b"x")
+    with pytest.raises(InputError, match="not a folder"):
+        with atomic_output(tmp_path / "file.bin" / "a.png"):
+            pass
+    with pytest.raises(InputError, match="not a folder"):
+        with atomic_dir(tmp_path / "file.bin" / "frames"):
+            pass

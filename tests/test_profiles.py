@@ -131,3 +131,17 @@ def test_docstring_examples_run(module):
     import importlib
     result = doctest.testmod(importlib.import_module(module))
     assert result.attempted > 0 and result.failed == 0
+
+
+@pytest.mark.parametrize("body,match", [
+    ("", "at least 2 frames"),
+    ("0,0.0,1,0.1,0.2,0.1\n1,0.033,1,nan,0.2,0.1\n", "non-finite"),
+    ("0,0.0,1,0.1,0.2,0.1\n1,0.033,1,0.1,inf,0.1\n", "non-finite"),
+])
+def test_read_profile_refuses_empty_and_non_finite(tmp_path, body, match):
+    from visemeface.analysis.profiles import read_profile
+
+    p = tmp_path / "p.csv"
+    p.write_text("frame,time,count,area,width,height\n" + body)
+    with pytest.raises(InputError, match=match):
+        read_profile(p)

@@ -306,3 +306,10 @@ def test_mesh_without_eyes_region_still_rigs():
         from pathlib import Path
         with tempfile.TemporaryDirectory() as d:
             MuscleRig.from_file(ref.face, _write(Path(d), text))
+
+
+def test_binary_rig_file_is_a_one_line_error(tmp_path):
+    p = tmp_path / "garbage.toml"
+    p.write_bytes(bytes(range(200, 256)) * 4)
+    with pytest.raises(InputError, match="not UTF-8"):
+        MuscleRig.from_file(default_rig().face, p)

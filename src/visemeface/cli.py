@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import pkgutil
+import signal
 import sys
 import warnings
 
@@ -51,6 +52,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 0
     warnings.showwarning = _show_warning
+    previous = _terminate_like_interrupt()
     try:
         return int(args.func(args) or 0)
     except VisemefaceError as exc:
@@ -66,6 +68,23 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("visemeface: interrupted", file=sys.stderr)
         return 130
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _terminate_like_interrupt():
+    """Make SIGTERM (``kill``, a CI timeout) unwind like Ctrl-C, so temporary outputs are removed.
+
+    Returns the previous handler, or None when signals cannot be set (not the main thread).
+    """
+    def handler(signum, frame):
+        raise KeyboardInterrupt
+
+    try:
+        return signal.signal(signal.SIGTERM, handler)
+    except ValueError:
+        return None
 
 
 if __name__ == "__main__":

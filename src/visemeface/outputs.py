@@ -31,9 +31,22 @@ def check_new(path: str | Path, force: bool = False) -> Path:
     path = Path(path)
     if path.exists() and not force:
         raise InputError("output exists; use --force to overwrite", path)
-    if not path.parent.exists():
-        raise InputError("output folder does not exist", path.parent)
+    parent = path.parent
+    if not parent.exists():
+        raise InputError("output folder does not exist", parent)
+    if not parent.is_dir():
+        raise InputError("output folder is not a folder", parent)
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise InputError("output folder is not writable", parent)
     return path
+
+
+def _temporary(make, path: Path):
+    """Run ``make()`` (mkstemp/mkdtemp beside ``path``); OS refusals become InputError."""
+    try:
+        return make()
+    except OSError as exc:
+        raise InputError(f"cannot write here: {exc.strerror}", path) from None
 
 
 @contextlib.contextmanager
@@ -44,8 +57,8 @@ def atomic_output(path: str | Path, force: bool = False) -> Iterator[Path]:
     format from it) and lives in the same folder, so the final rename is atomic.
     """
     path = check_new(path, force)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix,
-                               dir=path.parent)
+    fd, tmp = _temporary(lambda: tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix,
+                                                 dir=path.parent), path)
     os.close(fd)
     tmp = Path(tmp)
     try:
@@ -62,7 +75,7 @@ def atomic_output(path: str | Path, force: bool = False) -> Iterator[Path]:
 def atomic_dir(path: str | Path, force: bool = False) -> Iterator[Path]:
     """Yield a temporary folder to fill; move it to ``path`` on success."""
     path = check_new(path, force)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=path.parent))
+    tmp = Path(_temporary(lambda: tempfile.mkdtemp(prefix=f".{path.name}.", dir=path.parent), path))
     try:
         yield tmp
         os.chmod(tmp, _umask_mode(0o777))

@@ -119,11 +119,17 @@ def read_profile(path: str | Path) -> pd.DataFrame:
     missing = [c for c in ("time", *METRICS) if c not in df.columns]
     if missing:
         raise InputError(f"not a profile CSV: missing column(s) {', '.join(missing)}", path)
+    if len(df) < 2:
+        raise InputError("a profile needs at least 2 frames", path)
     for c in ("time", *METRICS):
         if not pd.api.types.is_numeric_dtype(df[c]):
             bad = pd.to_numeric(df[c], errors="coerce").isna() & df[c].notna()
             row = int(np.argmax(bad.to_numpy()))
             raise InputError(f"column {c!r} has a non-number {df[c].iloc[row]!r}", path, row + 2)
+        finite = np.isfinite(df[c].to_numpy(float))
+        if not finite.all():
+            row = int(np.argmin(finite))
+            raise InputError(f"column {c!r} has a non-finite value {df[c].iloc[row]!r}", path, row + 2)
     t = df["time"].to_numpy(float)
     if len(t) < 2:
         raise InputError("a profile needs at least 2 frames", path)

@@ -141,6 +141,8 @@ class _RigFileReader:
             self.text = path.read_text(encoding="utf-8")
         except OSError as exc:
             raise InputError(f"cannot read rig file: {exc.strerror}", path) from None
+        except UnicodeDecodeError:
+            raise InputError("not a rig file: not UTF-8 text", path) from None
         try:
             self.data = tomllib.loads(self.text)
         except tomllib.TOMLDecodeError as exc:

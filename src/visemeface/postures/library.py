@@ -85,7 +85,7 @@ def _read_csv(path: Path) -> pd.DataFrame:
         raise InputError("file not found", path)
     try:
         df = pd.read_csv(path, dtype=str, keep_default_na=False, skipinitialspace=True)
-    except (pd.errors.ParserError, UnicodeDecodeError) as exc:
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
         raise InputError(f"not a readable CSV table ({str(exc).splitlines()[0]})", path) from None
     if df.empty:
         raise InputError("table has no rows", path)
