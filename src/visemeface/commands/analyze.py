@@ -80,7 +80,10 @@ def run(args) -> int:
 
     detector = OpeningDetector(threshold=_threshold(args.threshold), hull=args.hull, teeth=args.teeth,
                                min_area=args.min_area, pad=_pad(args.pad))
-    side_file = Path(args.box_json) if args.box_json else sidecar_path(args.input)
+    if not Path(args.input).exists():
+        raise InputError("no such file or folder", args.input)
+    # --box wins; a sidecar found next to the input is only read when no box is given
+    side_file = Path(args.box_json) if args.box_json else (None if args.box else sidecar_path(args.input))
     sidecar = read_sidecar(side_file) if side_file else None
     if args.box is not None:
         box = parse_box(args.box)
