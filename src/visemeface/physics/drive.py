@@ -337,8 +337,9 @@ TRACKING_HZ = 0.0
 #: Tracking frequency for speech (``speak --physics``): the drive's dead loads
 #: F_int(U) hold the soft tissue (μ 800 Pa) at strains where that equilibrium is
 #: unstable (the lips snap 10-20 mm away and invert within a few ms on /w ah f ay/);
-#: a spring m (2π·1000 Hz)² (U − u) on every free node keeps the 3 s example stable.
-#: The seed's scenarios (simulate) run without it (their zipper needs the lips free).
+#: a spring m (2π·1000 Hz)² (U − u) on every free node except the lip edges (the
+#: saliva's nodes) keeps the 3 s example stable. The seed's scenarios (simulate)
+#: run without it (their zipper needs the lips free).
 SPEECH_TRACKING_HZ = 1000.0
 #: Least volume ratio J of a tissue element in the drive's target (see :meth:`FaceDrive.untangle`).
 MIN_JACOBIAN = 0.3
@@ -351,8 +352,8 @@ class PhysicsSettings:
     ``glue`` is the uniform glue strength K_glue; ``glue_profile`` a profile
     string (:func:`visemeface.physics.saliva.parse_glue_profile`) applied over
     it; ``glue_file`` a CSV (:func:`visemeface.physics.saliva.read_glue_file`).
-    ``tracking`` (Hz, 0 = off) adds to every free node i the force
-    m_i (2π f)² (U_i(t) − u_i) toward its kinematic position (equilibrium
+    ``tracking`` (Hz, 0 = off) adds to every free node i but the lip edges'
+    the force m_i (2π f)² (U_i(t) − u_i) toward its kinematic position (equilibrium
     unchanged, unstable modes damped out; see :data:`SPEECH_TRACKING_HZ`).
     ``min_jacobian`` bounds the target's volume ratio (:meth:`FaceDrive.untangle`);
     ``field_smoothing`` averages the rig's surface field over quad neighbours.
@@ -448,6 +449,10 @@ class StickySimulation:
             forces=[(np.arange(mesh.n_nodes), self.drive.force)],
             element_hook=self.saliva.hook(fem.saliva), unchecked=fem.saliva,
             tracking=(settings.tracking, self.drive.target))
+        if self.solver._track_k is not None:
+            # The lip edges (the saliva's nodes) stay free of the spring: there the
+            # glue, not the rig, decides when the lips part.
+            self.solver._track_k[np.unique(mesh.hexes[fem.saliva])] = 0.0
         self.rest_gaps = fem.rest_gaps
 
     @property
