@@ -467,3 +467,12 @@ def test_speak_physics_bad_input_exits_2_before_simulating(short, capsys, coarse
     err = capsys.readouterr().err
     assert code == 2 and message in err and err.count("\n") == 1
     assert not (short / "tiny.mp4").exists()
+
+
+def test_absurd_transcript_length_and_msaa_are_refused_before_work(short, capsys):
+    (short / "huge.txt").write_text("0.0 0.2 _\n0.2 1e9 aa\n")
+    assert main(["speak", "huge.txt", "--size", "32", "-q"]) == 2
+    assert "limit" in capsys.readouterr().err
+    assert main(["speak", "short.txt", "--size", "32", "--msaa", "3", "-q"]) == 2
+    assert "--msaa" in capsys.readouterr().err
+    assert not (short / "huge.mp4").exists() and not (short / "short.mp4").exists()

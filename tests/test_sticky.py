@@ -414,3 +414,27 @@ def test_tracking_spring_keeps_the_equilibrium_and_frees_the_lip_edges(model):
     lips = np.unique(np.concatenate([fem.face.region("upper_lip"), fem.face.region("lower_lip")]))
     d = ends[0.0][lips] - ends[drive.SPEECH_TRACKING_HZ][lips]
     assert np.sqrt(np.mean(np.sum(d ** 2, axis=1))) < 0.01 * fem.mouth_width
+
+
+@pytest.mark.parametrize("extra,message", [
+    (["--threads", "0"], "--threads"),
+    (["--jaw", "5"], "--jaw"),
+    (["--fps", "nan"], "--fps"),
+])
+def test_simulate_option_errors_exit_2_before_any_work(tmp_path, monkeypatch, capsys, extra, message):
+    from visemeface.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["simulate", "part", "--size", "64", "-q", *extra]) == 2
+    assert message in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_simulate_never_overwrites_a_users_json_next_to_the_video(tmp_path, monkeypatch, capsys):
+    from visemeface.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "part.mp4.json").write_text("mine")
+    assert main(["simulate", "part", "--size", "64", "-q"]) == 2
+    assert "--force" in capsys.readouterr().err
+    assert (tmp_path / "part.mp4.json").read_text() == "mine"

@@ -9,6 +9,8 @@ from the last checkpoint.
 
 from __future__ import annotations
 
+import math
+
 import argparse
 from pathlib import Path
 
@@ -93,7 +95,16 @@ def _paths(args):
         raise InputError(f"--size must be a positive multiple of 16, got {args.size}")
     if args.checkpoint_every < 1:
         raise InputError(f"--checkpoint-every must be >= 1, got {args.checkpoint_every}")
-    for path in (video, csv, args.frames, args.obj, args.pc2):
+    if not (math.isfinite(args.fps) and 1 <= args.fps <= 10_000):
+        raise InputError(f"--fps must be a number from 1 to 10000, got {args.fps}")
+    if not (math.isfinite(args.jaw) and 0 <= args.jaw <= 1):
+        raise InputError(f"--jaw must be an activation from 0 to 1, got {args.jaw}")
+    sidecar = None
+    if video is not None:
+        from visemeface.pipeline import video_sidecar
+
+        sidecar = video_sidecar(video)
+    for path in (video, sidecar, csv, args.frames, args.obj, args.pc2):
         if path is not None:
             check_new(path, args.force)
     if args.resume and not ckpt.exists():
@@ -240,8 +251,8 @@ def _write_outputs(args, fem, motion, table, video, csv, fps):
             if pw is not None:
                 pw.write(i, img)
     if video is not None:
-        import json
-        side = video.with_suffix(".json")
-        with atomic_output(side, force=True) as tmp:
-            tmp.write_text(json.dumps({"mouth_box": list(renderer.mouth_box()), "fps": fps,
-                                       "size": [args.size, args.size]}))
+        from visemeface.analysis.video import write_sidecar
+        from visemeface.pipeline import video_sidecar
+
+        write_sidecar(video_sidecar(video), renderer.mouth_box(), fps=fps, size=(args.size, args.size),
+                      force=args.force)

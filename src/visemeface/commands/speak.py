@@ -96,8 +96,8 @@ def check_early(args, default_video: Path):
         raise InputError(f"--fps must be in (0, 1000], got {args.fps:g}")
     if args.size < 16 or args.size % 16:
         raise InputError(f"--size must be a positive multiple of 16, got {args.size}")
-    if not 0 <= args.msaa <= 16:
-        raise InputError(f"--msaa must be between 0 and 16, got {args.msaa}")
+    if args.msaa not in (0, 2, 4, 8, 16):
+        raise InputError(f"--msaa must be 0, 2, 4, 8 or 16, got {args.msaa}")
     if args.audio is not None:
         check_audio(args.audio)
     settings = RenderSettings(size=args.size, view=args.view, msaa=args.msaa, fps=args.fps, audio=args.audio,
@@ -136,13 +136,22 @@ def physics_settings(args):
     return PhysicsSettings(glue=glue, glue_profile=args.glue_profile, saliva=saliva, tracking=SPEECH_TRACKING_HZ)
 
 
+#: Longest utterance one run animates (s): longer means wrong units far more often than a 3-hour take.
+MAX_UTTERANCE_S = 3 * 3600
+
+
 def render_segments(segments, args, out, settings) -> int:
     """Segments -> activation track -> video and exports; prints a summary."""
+    from visemeface.errors import InputError
     from visemeface.muscles.rig import default_rig
     from visemeface.pipeline import animate, parse_emotions
     from visemeface.postures.library import load_expressions, load_visemes
     from visemeface.speech.timeline import activation_track
 
+    length = float(segments["end"].max()) if len(segments) else 0.0
+    if length > MAX_UTTERANCE_S:
+        raise InputError(f"the transcript lasts {length:.0f} s, over the {MAX_UTTERANCE_S} s limit of one run "
+                         "(wrong time units? try --format / --sample-rate)")
     rig = default_rig()
     emotions = parse_emotions(args.emotion, load_expressions(rig=rig).index)
     ranges = {n: tuple(r) for n, r in zip(rig.names, rig.ranges)}

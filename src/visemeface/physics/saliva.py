@@ -309,6 +309,8 @@ def read_glue_file(path, s) -> np.ndarray:
             rows = list(csv.reader(fh))
     except OSError as e:
         raise InputError(f"cannot read glue file: {e.strerror}", path) from None
+    except (UnicodeDecodeError, csv.Error):
+        raise InputError("not a glue CSV file (not text)", path) from None
     rows = [r for r in rows if r and any(c.strip() for c in r)]
     if not rows:
         raise InputError("empty glue file", path)

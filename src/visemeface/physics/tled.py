@@ -867,5 +867,8 @@ class TLEDSolver:
 def set_threads(n: int | None) -> int:
     """Set numba's thread count (None: all cores); returns the count in use."""
     if n is not None:
+        most = numba.config.NUMBA_NUM_THREADS
+        if not 1 <= int(n) <= most:
+            raise InputError(f"--threads must be from 1 to {most} on this machine, got {n}")
         numba.set_num_threads(int(n))
     return numba.get_num_threads()
