@@ -313,3 +313,26 @@ def test_binary_rig_file_is_a_one_line_error(tmp_path):
     p.write_bytes(bytes(range(200, 256)) * 4)
     with pytest.raises(InputError, match="not UTF-8"):
         MuscleRig.from_file(default_rig().face, p)
+
+
+def test_one_track_conversion_for_every_consumer():
+    """Rendering, exports and the FEM drive read a track the same way: missing rig functions are
+    rest (0), unknown columns and non-finite values are errors, clamping warns."""
+    import pandas as pd
+
+    from visemeface.pipeline import track_matrix
+
+    rig = default_rig()
+    track = pd.DataFrame({"jaw": [0.0, 0.5, 2.0], "orbicularis_oris": [0.0, 0.3, 0.3]},
+                         index=pd.Index([0.0, 1 / 30, 2 / 30], name="time"))
+    A = rig.track_matrix(track)
+    assert A.shape == (3, len(rig.names)) and A[:, rig.names.index("zygomatic_major_left")].sum() == 0
+    with pytest.warns(UserWarning, match="jaw"):
+        clamped = track_matrix(track, rig)
+    assert clamped[2, rig.names.index("jaw")] == rig.ranges[rig.names.index("jaw"), 1]
+    with pytest.warns(UserWarning):
+        np.testing.assert_allclose(rig.poses(track)[1], rig.pose(clamped[1]), atol=1e-6)
+    with pytest.raises(InputError, match="unknown muscle 'zygomatic_mayor_left'.*zygomatic_major_left"):
+        rig.track_matrix(track.assign(zygomatic_mayor_left=0.1))
+    with pytest.raises(InputError, match="'jaw' at t=0.0333"):
+        rig.track_matrix(track.assign(jaw=[0.0, np.nan, 0.0]))

@@ -345,7 +345,7 @@ def test_bad_physics_input_is_refused_before_simulating(model):
         drive.StickySimulation(fem, rig, track, physics="stiky")
     bad = track.copy()
     bad["nonsense_muscle"] = 0.0
-    with pytest.raises(InputError, match="not a rig muscle"):
+    with pytest.raises(InputError, match="unknown muscle"):
         drive.StickySimulation(fem, rig, bad)
 
 

@@ -94,23 +94,9 @@ def parse_emotions(specs, known) -> dict[str, float]:
 
 
 def track_matrix(track: pd.DataFrame, rig) -> np.ndarray:
-    """The track's activations as an (F, M) float array in ``rig.names`` order, clamped.
-
-    Raises
-    ------
-    InputError
-        A rig function is missing from the track, or a value is not finite.
-    """
-    names = list(rig.names)
-    missing = [n for n in names if n not in track.columns]
-    if missing:
-        raise InputError(f"activation track lacks rig function(s) {', '.join(missing)}")
-    a = track[names].to_numpy(dtype=np.float64)
-    if not np.all(np.isfinite(a)):
-        row = int(np.argwhere(~np.isfinite(a))[0, 0])
-        raise InputError(f"activation track has a non-finite value at t={track.index[row]:g} s")
-    ranges = np.asarray(rig.ranges, dtype=np.float64).reshape(len(names), 2)
-    return np.clip(a, ranges[:, 0], ranges[:, 1])
+    """The track's activations as an (F, M) float array in ``rig.names`` order, clamped
+    (:meth:`MuscleRig.track_matrix`, then :meth:`MuscleRig.clamp`)."""
+    return rig.clamp(rig.track_matrix(track))
 
 
 # --------------------------------------------------------------------------- glTF from the rig

@@ -543,25 +543,46 @@ class MuscleRig:
         a = self._vector(a)
         return (self._rest_flat + self._coefficients(a) @ self._matrix).reshape(-1, 3)
 
+    def track_matrix(self, track) -> np.ndarray:
+        """An ActivationTrack (DataFrame, columns = rig functions) as (F, M+1) floats in ``names`` order.
+
+        The one conversion every consumer of a track uses (rendering, exports, the FEM drive):
+        a column that is no rig function is an error (with close matches), a rig function the
+        track leaves out is 0 (rest), a non-finite value is an error naming the muscle and time.
+        Values are *not* clamped here; :meth:`poses` clamps with a warning.
+        """
+        unknown = [c for c in track.columns if c not in self.index]
+        if unknown:
+            raise InputError(f"unknown muscle {unknown[0]!r} in the activation track"
+                             + close_matches(str(unknown[0]), self.names))
+        A = track.reindex(columns=list(self.names), fill_value=0.0).to_numpy(dtype=np.float64)
+        if not np.all(np.isfinite(A)):
+            f, i = np.argwhere(~np.isfinite(A))[0]
+            raise InputError(f"activation of {self.names[i]!r} at t={track.index[f]:g} s is {A[f, i]} "
+                             "(must be finite)")
+        return A
+
+    def clamp(self, A: np.ndarray) -> np.ndarray:
+        """``A`` (F, M+1) clamped to the muscles' ranges, with one warning naming those clamped."""
+        lo, hi = self.ranges[:, 0], self.ranges[:, 1]
+        bad = np.any((A < lo) | (A > hi), axis=0)
+        if bad.any():
+            warnings.warn("activations clamped to the muscles' ranges: "
+                          + ", ".join(self.names[i] for i in np.flatnonzero(bad)), stacklevel=3)
+            A = np.clip(A, lo, hi)
+        return A
+
     def poses(self, activations) -> np.ndarray:
         """Posed vertices (F, N, 3) float32 for activations (F, M+1) (or a DataFrame with rig columns)."""
         if hasattr(activations, "columns"):
-            unknown = [c for c in activations.columns if c not in self.index]
-            if unknown:
-                raise InputError(f"unknown muscle {unknown[0]!r}" + close_matches(str(unknown[0]), self.names))
-            activations = activations.reindex(columns=list(self.names), fill_value=0.0).to_numpy(float)
+            activations = self.track_matrix(activations)
         A = np.atleast_2d(np.asarray(activations, dtype=float))
         if A.ndim != 2 or A.shape[1] != len(self.names):
             raise InputError(f"expected activations of shape (frames, {len(self.names)}), got {A.shape}")
         if not np.all(np.isfinite(A)):
             f, i = np.argwhere(~np.isfinite(A))[0]
             raise InputError(f"activation of {self.names[i]!r} at frame {f} is {A[f, i]} (must be finite)")
-        lo, hi = self.ranges[:, 0], self.ranges[:, 1]
-        bad = np.any((A < lo) | (A > hi), axis=0)
-        if bad.any():
-            warnings.warn("activations clamped to the muscles' ranges: "
-                          + ", ".join(self.names[i] for i in np.flatnonzero(bad)), stacklevel=2)
-            A = np.clip(A, lo, hi)
+        A = self.clamp(A)
         out = self._coefficients(A) @ self._matrix
         out += self._rest_flat.astype(np.float32)
         return out.reshape(len(A), -1, 3)

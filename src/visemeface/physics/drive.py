@@ -425,7 +425,7 @@ class StickySimulation:
             raise InputError(f"unknown physics {physics!r}" + close_matches(physics, PHYSICS)
                              + f"; use one of {', '.join(PHYSICS)}")
         self.fem, self.rig, self.physics, self.settings = fem, rig, physics, settings
-        self.values, self.fps = track_values(track, rig.names)
+        self.values, self.fps = track_values(track, rig)
         if not (np.isfinite(settings.dt) and settings.dt > 0):
             raise InputError(f"time step must be > 0, got {settings.dt}")
         self.steps_per_frame = int(np.ceil(1.0 / (self.fps * settings.dt) - 1e-9))
@@ -577,23 +577,17 @@ class _FaceSolver:
         return solver
 
 
-def track_values(track: pd.DataFrame, names) -> tuple[np.ndarray, float]:
-    """(frames, M) activations in ``names`` order and the frame rate of an ActivationTrack."""
+def track_values(track: pd.DataFrame, rig) -> tuple[np.ndarray, float]:
+    """(frames, M) activations in ``rig.names`` order (:meth:`MuscleRig.track_matrix`) and the
+    frame rate of an ActivationTrack."""
     if not isinstance(track, pd.DataFrame) or len(track) == 0:
         raise InputError("the activation track is empty")
-    unknown = [c for c in track.columns if c not in names]
-    if unknown:
-        raise InputError(f"activation track column {unknown[0]!r} is not a rig muscle"
-                         + close_matches(str(unknown[0]), names))
+    values = rig.track_matrix(track)
     fps = track.attrs.get("fps")
     if fps is None and len(track) > 1:
         fps = 1.0 / float(np.median(np.diff(track.index.to_numpy(dtype=float))))
     if fps is None or not np.isfinite(fps) or fps <= 0:
         raise InputError(f"activation track needs attrs['fps'] > 0, got {fps!r}")
-    values = track.reindex(columns=list(names), fill_value=0.0).to_numpy(dtype=np.float64)
-    if not np.isfinite(values).all():
-        r, c = np.argwhere(~np.isfinite(values))[0]
-        raise InputError(f"activation track has a non-finite value at frame {r}, column {names[c]!r}")
     return values, float(fps)
 
 
