@@ -284,3 +284,9 @@ def test_empty_table_file_is_a_one_line_error(tmp_path):
     p.write_bytes(b"")
     with pytest.raises(InputError, match="not a readable CSV"):
         lib.load_visemes(p)
+
+
+def test_viseme_names_are_case_insensitive_and_suggested():
+    assert lib.blend("AA").equals(lib.blend("aa"))
+    with pytest.raises(InputError, match=r"unknown viseme 'AX2' \(did you mean: ax"):
+        lib.blend("AX2")

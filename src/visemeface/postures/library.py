@@ -400,8 +400,10 @@ def blend(viseme: str, emotions: Mapping[str, float] | None = None, w_viseme: fl
         visemes = default_v if visemes is None else visemes
         expressions = default_e if expressions is None else expressions
     viseme = str(viseme).strip()
+    if viseme not in visemes.index and viseme.lower() in visemes.index:
+        viseme = viseme.lower()           # DECtalk symbols are lower case; "AA" means /aa/
     if viseme not in visemes.index:
-        raise InputError(f"unknown viseme {viseme!r}{close_matches(viseme, visemes.index)}")
+        raise InputError(f"unknown viseme {viseme!r}{close_matches(viseme.lower(), visemes.index)}")
     w_v = _weight("viseme", w_viseme)
     total = w_v * visemes.loc[viseme].reindex(list(names), fill_value=0.0).to_numpy(dtype=float)
     for name, w in (emotions or {}).items():
