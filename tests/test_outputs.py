@@ -70,3 +70,18 @@ def test_output_under_a_file_is_a_one_line_error(tmp_path):
     with pytest.raises(InputError, match="not a folder"):
         with atomic_dir(tmp_path / "file.bin" / "frames"):
             pass
+
+
+@pytest.mark.parametrize("argv", [
+    ["sheet", "-o", "s.txt"],
+    ["pose", "ah", "-o", "p.jpg"],
+    ["analyze", "in.mp4", "--box", "1,1,8,8", "-o", "a.txt"],
+])
+def test_wrong_output_suffix_is_refused_before_work(tmp_path, monkeypatch, capsys, argv):
+    from visemeface.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "in.mp4").write_bytes(b"not a video")
+    assert main(argv) == 2
+    assert "must end in" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["in.mp4"]

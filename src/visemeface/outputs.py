@@ -41,6 +41,14 @@ def check_new(path: str | Path, force: bool = False) -> Path:
     return path
 
 
+def check_suffix(path: str | Path, *suffixes: str) -> Path:
+    """Refuse an output whose name does not end in one of ``suffixes`` (e.g. ".png")."""
+    path = Path(path)
+    if path.suffix.lower() not in suffixes:
+        raise InputError(f"the output must end in {' or '.join(suffixes)}", path)
+    return path
+
+
 def _temporary(make, path: Path):
     """Run ``make()`` (mkstemp/mkdtemp beside ``path``); OS refusals become InputError."""
     try:

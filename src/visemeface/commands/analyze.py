@@ -76,7 +76,7 @@ def run(args) -> int:
     from visemeface.analysis.profiles import analyze_frames, plot_profiles, write_profile
     from visemeface.analysis.video import open_frames, parse_box, read_sidecar, sidecar_path
     from visemeface.errors import InputError
-    from visemeface.outputs import atomic_dir, check_new, progress
+    from visemeface.outputs import atomic_dir, check_new, check_suffix, progress
 
     detector = OpeningDetector(threshold=_threshold(args.threshold), hull=args.hull, teeth=args.teeth,
                                min_area=args.min_area, pad=_pad(args.pad))
@@ -92,6 +92,9 @@ def run(args) -> int:
     else:
         raise InputError(f"no mouth box for {args.input}: give --box X,Y,W,H or --box-json FILE "
                          "(or put a sidecar <input>.json next to it)")
+    check_suffix(args.output, ".csv")
+    if args.plot:
+        check_suffix(args.plot, ".png", ".pdf", ".svg")
     outputs = [args.output] + [p for p in (args.plot, args.overlay) if p]
     if len(set(map(str, outputs))) != len(outputs):
         raise InputError("the CSV, plot and overlay outputs must be different paths")

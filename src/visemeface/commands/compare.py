@@ -27,10 +27,10 @@ def run(args) -> int:
 
     from visemeface.analysis.profiles import METRICS, l2_distance, plot_profiles, read_profile
     from visemeface.errors import InputError
-    from visemeface.outputs import check_new
+    from visemeface.outputs import check_new, check_suffix
 
     if args.plot:
-        check_new(args.plot, args.force)
+        check_new(check_suffix(args.plot, ".png", ".pdf", ".svg"), args.force)
     paths = [args.reference, *args.others]
     profiles = {p: read_profile(p) for p in paths}
     ref = profiles[args.reference]

@@ -95,10 +95,10 @@ def activations(rig, posture, emotions: dict, sets: dict):
 
 def run(args) -> int:
     from visemeface.muscles.measure import lip_dimensions
-    from visemeface.outputs import check_new
+    from visemeface.outputs import check_new, check_suffix
     from visemeface.render.renderer import Renderer, save_png
 
-    check_new(args.output, args.force)
+    check_new(check_suffix(args.output, ".png"), args.force)
     from visemeface.render.renderer import parse_size
 
     size = parse_size(args.size)

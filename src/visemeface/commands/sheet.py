@@ -78,7 +78,7 @@ def run(args) -> int:
 
     from visemeface.errors import InputError
     from visemeface.muscles.rig import default_rig
-    from visemeface.outputs import atomic_output, check_new, progress
+    from visemeface.outputs import atomic_output, check_new, check_suffix, progress
     from visemeface.postures.library import load_expressions, load_visemes, parse_weights, posed_vertices
     from visemeface.render.renderer import Renderer
 
@@ -88,7 +88,7 @@ def run(args) -> int:
         raise InputError(f"--columns must be at least 1, got {args.columns}")
     if args.emotions and args.emotion:
         raise InputError("give either --emotions (a sheet of the emotions) or --emotion NAME=W (blend), not both")
-    check_new(args.output, args.force)
+    check_new(check_suffix(args.output, ".png"), args.force)
     rig = default_rig()
     mix = parse_weights(args.emotion)
     if args.emotions:
