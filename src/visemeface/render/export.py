@@ -247,12 +247,9 @@ def read_png(path) -> np.ndarray:
     return np.ascontiguousarray(img[..., ::-1])
 
 
-class PngSequenceWriter:
-    """Write frames as ``DIR/frame_000000.png``, ``frame_000001.png``, ...
-
-    The folder appears (atomically renamed from a temporary folder) only when
-    the block ends without error.
-    """
+class _FolderSequence:
+    """A context manager filling a folder of frame files through :func:`atomic_dir`:
+    the folder appears (renamed from a temporary one) only when the block ends without error."""
 
     def __init__(self, folder, force: bool = False):
         self.folder = Path(folder)
@@ -260,17 +257,25 @@ class PngSequenceWriter:
         self._ctx = None
         self._tmp = None
 
-    def __enter__(self) -> PngSequenceWriter:
+    def __enter__(self):
         self._ctx = atomic_dir(self.folder, self.force)
         self._tmp = self._ctx.__enter__()
         return self
 
+    def __exit__(self, *exc):
+        return self._ctx.__exit__(*exc)
+
+
+class PngSequenceWriter(_FolderSequence):
+    """Write frames as ``DIR/frame_000000.png``, ``frame_000001.png``, ...
+
+    The folder appears (atomically renamed from a temporary folder) only when
+    the block ends without error.
+    """
+
     def write(self, index: int, image: np.ndarray) -> None:
         """Write frame ``index``."""
         write_png(self._tmp / frame_name(index, "png"), image)
-
-    def __exit__(self, *exc):
-        return self._ctx.__exit__(*exc)
 
 
 # --------------------------------------------------------------------------- OBJ
@@ -296,7 +301,7 @@ def obj_text(vertices: np.ndarray, faces_text: str, header: str = "") -> str:
     return head + ("v %.6f %.6f %.6f\n" * len(v)) % tuple(v.ravel()) + faces_text
 
 
-class ObjSequenceWriter:
+class ObjSequenceWriter(_FolderSequence):
     """Write one OBJ per frame into a folder, all with the same faces.
 
     Parameters
@@ -308,24 +313,13 @@ class ObjSequenceWriter:
     """
 
     def __init__(self, folder, faces, force: bool = False):
-        self.folder = Path(folder)
-        self.force = force
+        super().__init__(folder, force)
         self.faces_text = obj_faces_text(faces)
-        self._ctx = None
-        self._tmp = None
-
-    def __enter__(self) -> ObjSequenceWriter:
-        self._ctx = atomic_dir(self.folder, self.force)
-        self._tmp = self._ctx.__enter__()
-        return self
 
     def write(self, index: int, vertices: np.ndarray) -> None:
         """Write frame ``index`` with vertex positions (N, 3)."""
         text = obj_text(vertices, self.faces_text, header=f"visemeface frame {index}")
         (self._tmp / frame_name(index, "obj")).write_text(text)
-
-    def __exit__(self, *exc):
-        return self._ctx.__exit__(*exc)
 
 
 # --------------------------------------------------------------------------- PC2
