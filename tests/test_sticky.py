@@ -78,9 +78,13 @@ def _stretched(X, lam):
     return sv.deformation_gradient(u, sv.hex_centre_gradients(X))
 
 
+#: The state machine on given element forces (the film model computes its own).
+SOLID = sv.SalivaParams(model="neo-hookean")
+
+
 def test_saliva_breaks_at_Z_then_force_decays_geometrically():
     X = _box()
-    sal = sv.SalivaBreaking(X, glue=0.08)
+    sal = sv.SalivaBreaking(X, glue=0.08, params=SOLID)
     f = np.ones((1, 8, 3))
     below = _stretched(X, np.sqrt(1.079))
     out = sal.update(0.0, below, f)
@@ -97,6 +101,72 @@ def test_saliva_breaks_at_Z_then_force_decays_geometrically():
     # ... contact does: the lips are back together, saliva re-bonds.
     out = sal.update(2e-4, _stretched(X, 0.99), 3 * f)
     assert not sal.broken[0] and np.allclose(out, 3 * f)
+
+
+def test_pressed_puckered_lips_rebond_and_stick_again():
+    # /m/: the lips pressed (film squeezed out) and gathered along the seam by the
+    # sphincter (in-plane strain 0.4); on release the film re-forms as soon as the
+    # lips are back at the film's thickness, and holds until Q reaches Z again.
+    X = _box()
+    sal = sv.SalivaBreaking(X, glue=0.08)
+    pucker = np.diag([0.6, 1.0, 1.0])
+    sal.update(0.0, _stretched(X, 0.4) @ pucker, np.zeros((1, 8, 3)))
+    assert sal.broken[0]                                  # squeezed out (Q = 0.16)
+    sal.update(1e-5, _stretched(X, 0.9) @ pucker, np.zeros((1, 8, 3)))
+    assert not sal.broken[0]                              # back in contact: re-bonded
+    out = sal.update(2e-5, _stretched(X, np.sqrt(1.07)) @ pucker, np.zeros((1, 8, 3)))
+    assert not sal.broken[0] and np.abs(out).max() > 0    # glued: pulls the lips together
+    sal.update(3e-5, _stretched(X, np.sqrt(1.09)) @ pucker, np.zeros((1, 8, 3)))
+    assert sal.broken[0]
+
+
+def _film(F, X):
+    from visemeface.physics.materials import SALIVA
+    G = sv.hex_centre_gradients(X)
+    return sv.film_forces(F, sv.element_frames(X)[:, 1], G, sv.hex_volumes(X), SALIVA.K + 4 * SALIVA.mu / 3)
+
+
+def test_film_matches_the_solid_across_the_lips_and_ignores_in_plane_motion():
+    from visemeface.physics.hexmesh import HexMesh
+    from visemeface.physics.materials import SALIVA
+    from visemeface.physics.tled import TLEDSolver
+    X = _box()
+    solver = TLEDSolver(HexMesh(X[0].copy(), np.arange(8)[None], material=np.zeros(1, np.int64)), [SALIVA], dt=1e-6)
+    u = np.zeros((8, 3))
+    u[:, 1] = 0.002 * X[0, :, 1]                                  # 0.2 % across the film
+    G = sv.hex_centre_gradients(X)
+    solid = solver.internal_forces(u)
+    film = _film(sv.deformation_gradient(u[None], G), X)[0]
+    np.testing.assert_allclose(film[:, 1], solid[:, 1], rtol=0.01)
+    # in-plane stretch, compression and sliding of the lips along each other: no force
+    for A in (np.diag([0.3, 0.0, 0.0]), np.diag([-0.4, 0.0, 0.2]), np.array([[0, 0, 0.5], [0, 0, 0], [0, 0, 0.0]])):
+        F = sv.deformation_gradient((X[0] @ A.T)[None], G)
+        np.testing.assert_allclose(_film(F, X), 0.0, atol=1e-15)
+        assert np.abs(solver.internal_forces(X[0] @ A.T)).max() > 1e-6   # the solid would push back
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_film_forces_are_the_gradient_of_its_energy(seed):
+    from visemeface.physics.materials import SALIVA
+    rng = np.random.default_rng(seed)
+    X = _box()
+    G = sv.hex_centre_gradients(X)
+    n, V, M = sv.element_frames(X)[:, 1], sv.hex_volumes(X), SALIVA.K + 4 * SALIVA.mu / 3
+    u = 1e-4 * rng.normal(size=(1, 8, 3))
+
+    def energy(u):
+        Q = sv.stretch_across(sv.deformation_gradient(u, G), n)
+        return float((V * M / 8 * (Q - 1) ** 2).sum())
+    f = _film(sv.deformation_gradient(u, G), X)
+    h = 1e-9
+    num = np.zeros_like(u)
+    for a in range(8):
+        for i in range(3):
+            d = np.zeros_like(u)
+            d[0, a, i] = h
+            num[0, a, i] = (energy(u + d) - energy(u - d)) / (2 * h)
+    np.testing.assert_allclose(f, num, rtol=1e-5, atol=1e-9 * np.abs(num).max())
+    np.testing.assert_allclose(f.sum(axis=1), 0.0, atol=1e-12)            # no net force
 
 
 def test_compression_never_breaks_and_no_glue_breaks_on_any_stretch():
@@ -170,14 +240,16 @@ def test_glue_file_layouts(tmp_path):
         sv.read_glue_file(p, np.zeros(3))
 
 
-def test_compiled_hook_follows_the_same_rule_as_update():
+@pytest.mark.parametrize("params", [SOLID, sv.SalivaParams()], ids=["neo-hookean", "film"])
+def test_compiled_hook_follows_the_same_rule_as_update(params):
     rng = np.random.default_rng(0)
     X = np.concatenate([_box(), _box(), _box()])
     glue = np.array([0.0, 0.08, 0.3])
-    a, b = sv.SalivaBreaking(X, glue), sv.SalivaBreaking(X, glue)
+    a, b = sv.SalivaBreaking(X, glue, params), sv.SalivaBreaking(X, glue, params)
     hook = b.hook(np.array([2, 0, 1]))                 # saliva at mesh ids 2, 0, 1
-    for step, lam in enumerate([1.0, 1.02, 1.05, 1.2, 1.1, 0.99, 1.03, 1.5]):
-        F = np.concatenate([_stretched(X[i:i + 1], lam + 0.01 * i) for i in range(3)])
+    shear = np.array([[1.0, 0.3, 0.0], [0.0, 1.0, 0.0], [0.1, 0.0, 0.8]])
+    for step, lam in enumerate([1.0, 1.02, 1.05, 1.2, 1.1, 0.99, 0.4, 1.03, 1.5]):
+        F = np.concatenate([_stretched(X[i:i + 1], lam + 0.01 * i) for i in range(3)]) @ shear
         f = rng.normal(size=(3, 8, 3))
         want = a.update(step * 1e-5, F, f)
         Fm, fm = np.zeros((3, 3, 3)), np.zeros((3, 8, 3))

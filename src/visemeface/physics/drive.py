@@ -153,7 +153,7 @@ class FaceDrive:
     """
 
     def __init__(self, fem, rig, values, fps: float, tissue_forces, field_smoothing: int = 0,
-                 min_jacobian: float = 0.0):
+                 min_jacobian: float = 0.0, free_lips: bool = False):
         self.fem, self.rig = fem, rig
         self.min_jacobian = float(min_jacobian)
         self.field_smoothing = int(field_smoothing)
@@ -172,9 +172,12 @@ class FaceDrive:
         w = rig.jaw_weight[fem.surface_vertices[inner - L * S]]
         lam = fem.lip_weight if fem.lip_weight is not None else np.zeros(S)
         self._lip = lam[inner - L * S]
-        moving = (w != 0) | (self._lip > 0)
+        under_lips = self._lip > 0
+        moving = (w != 0) | under_lips
+        #: Bone-side nodes under the lips left free (the lips' muscle layer moves with the tissue).
+        self.free_nodes = inner[under_lips] if free_lips else inner[:0]
         self.fixed_nodes = inner[~moving]
-        self.jaw_nodes = inner[moving]
+        self.jaw_nodes = inner[moving & ~under_lips] if free_lips else inner[moving]
         self._inner = inner
         self._inner_rest = mesh.nodes[inner]
         self._inner_w = w.copy()
@@ -319,6 +322,11 @@ class FaceDrive:
         buf += ua
         return buf
 
+    def target_velocity(self, t: float) -> np.ndarray:
+        """dU/dt (n, 3) at time ``t``: constant between frames (the field is linear there)."""
+        self.target(t)
+        return self._tseg[2] * self.fps
+
     def jaw(self, t: float) -> np.ndarray:
         """Prescribed jaw-node displacements at time ``t``, linear between frames."""
         w = self._interval(t)
@@ -333,7 +341,7 @@ class FaceDrive:
 PHYSICS = ("sticky", "elastic")
 #: Frequency (Hz) of the mass-proportional spring that holds each free node
 #: toward its kinematic position (see :class:`PhysicsSettings`).
-TRACKING_HZ = 0.0
+TRACKING_HZ = 1000.0
 #: Tracking frequency for speech (``speak --physics``): the drive's dead loads
 #: F_int(U) hold the soft tissue (μ 800 Pa) at strains where that equilibrium is
 #: unstable (the lips snap 10-20 mm away and invert within a few ms on /w ah f ay/);
@@ -341,6 +349,12 @@ TRACKING_HZ = 0.0
 #: saliva's nodes) keeps the 3 s example stable. The seed's scenarios (simulate)
 #: run without it (their zipper needs the lips free).
 SPEECH_TRACKING_HZ = 1000.0
+#: Radii (m) of the lips' released band (no tracking spring) at the centre and toward the
+#: corners (:func:`release_weight`).
+RELEASE_CENTRE = 0.004
+RELEASE_CORNER = 0.03
+#: Radius (m) around each mouth corner where the lips stay held (:func:`release_weight`).
+CORNER_HOLD = 0.004
 #: Least volume ratio J of a tissue element in the drive's target (see :meth:`FaceDrive.untangle`).
 MIN_JACOBIAN = 0.3
 
@@ -367,6 +381,7 @@ class PhysicsSettings:
     glue_file: str | None = None
     saliva: SalivaParams = field(default_factory=SalivaParams)
     tracking: float = TRACKING_HZ
+    lip_release: tuple[float, float] | None = (RELEASE_CENTRE, RELEASE_CORNER)
     field_smoothing: int = 0
     min_jacobian: float = MIN_JACOBIAN
 
@@ -441,18 +456,25 @@ class StickySimulation:
         self._tissue = TLEDSolver(tissue_mesh, SOFT_TISSUE, dt=min(self.dt, settings.dt),
                                   damping=settings.damping, hourglass_kappa=settings.hourglass_kappa)
         self.drive = FaceDrive(fem, rig, self.values, self.fps, self._tissue.internal_forces,
-                               field_smoothing=settings.field_smoothing, min_jacobian=settings.min_jacobian)
+                               field_smoothing=settings.field_smoothing, min_jacobian=settings.min_jacobian,
+                               free_lips=settings.lip_release is not None)
         self.solver = _FaceSolver(
             mesh, [SOFT_TISSUE, SALIVA], dt=self.dt, damping=settings.damping,
             hourglass_kappa=settings.hourglass_kappa, fixed=self.drive.fixed_nodes,
             prescribed=[(self.drive.jaw_nodes, self.drive.jaw)],
             forces=[(np.arange(mesh.n_nodes), self.drive.force)],
             element_hook=self.saliva.hook(fem.saliva), unchecked=fem.saliva,
-            tracking=(settings.tracking, self.drive.target))
+            tracking=(settings.tracking, self.drive.target, self.drive.target_velocity))
         if self.solver._track_k is not None:
-            # The lip edges (the saliva's nodes) stay free of the spring: there the
-            # glue, not the rig, decides when the lips part.
-            self.solver._track_k[np.unique(mesh.hexes[fem.saliva])] = 0.0
+            # Across the lips (y) the spring lets go of the lips near the seam, so the
+            # glue, not the rig, decides when they part; along and out of the seam
+            # (x, z) it keeps holding them (the free lips would otherwise lag and
+            # buckle at the mouth corners).
+            k = np.repeat(self.solver._track_k, 3, axis=1)
+            w = np.ones(mesh.n_nodes) if settings.lip_release is None else release_weight(fem, *settings.lip_release)
+            w[np.unique(mesh.hexes[fem.saliva])] = 0.0
+            k[:, 1] *= w
+            self.solver._track_k = k
         self.rest_gaps = fem.rest_gaps
 
     @property
@@ -561,10 +583,18 @@ class _FaceSolver:
                 if self._track_k is not None:
                     # R was copied fresh from the drive's buffer: add k (U(t) - u).
                     R += self._track_k * (self._track_target(t) - self._u_now)
+                if self._drag is not None:
+                    # Damping relative to the moving posture: + α m dU/dt.
+                    R += self._drag * self._target_velocity(t)
                 return R
 
         solver = FaceSolver(*args, **kwargs)
-        hz, target = tracking
+        hz, target = tracking[:2]
+        velocity = tracking[2] if len(tracking) > 2 else None
+        solver._drag = None
+        if velocity is not None and solver.damping > 0:
+            solver._drag = (solver.damping * solver.mass)[:, None] * solver.free.reshape(len(solver.mass), -1)[:, :1]
+            solver._target_velocity = velocity
         solver._track_k = None
         if hz and hz > 0:
             k = solver.mass * (2.0 * np.pi * float(hz)) ** 2
@@ -575,6 +605,49 @@ class _FaceSolver:
         contiguous = len(checked) and checked[-1] - checked[0] + 1 == len(checked)
         solver._checked = slice(int(checked[0]), int(checked[-1]) + 1) if contiguous else checked
         return solver
+
+
+def release_weight(fem, centre: float = RELEASE_CENTRE, corner: float = RELEASE_CORNER,
+                   hold: float = CORNER_HOLD) -> np.ndarray:
+    """Per FEM node, the weight of the tracking spring across the lips (y): 0 near the seam, 1 away.
+
+    A node whose column (the surface vertex above it) lies ``d`` from the
+    nearest seam vertex, at position ``s`` across the mouth, gets
+
+    .. math:: w = \\mathrm{smoothstep}\\big((d - R/2) / (R/2)\\big),\\qquad
+              R(s) = R_c + (R_e - R_c)\\,\\min(1, 9 s^2)
+
+    (``R_c`` = ``centre``, ``R_e`` = ``corner``): free within R/2 of the seam,
+    held beyond R. The released band is narrow at the centre (the lips there
+    are held close to the rig, i.e. to the jaw and teeth) and wide from a third
+    of the way to the corners on (the lips there are free to follow the glue),
+    so the jaw loads the saliva hardest at the centre and the seam unzips from
+    the centre out (seed 000 §3.4.5: "the forces at the centre of the lips are
+    often greater"). The mouth corners themselves, where the lips join, stay
+    held within ``hold`` of the corner landmarks (w rises to 1 there): released,
+    the corner's distorted elements let the lips flap by several mm in speech.
+    """
+    from scipy.spatial import cKDTree
+    if not (0 < centre <= corner) or not hold >= 0:
+        raise InputError(f"lip release radii must satisfy 0 < centre <= corner and hold >= 0, "
+                         f"got {centre}, {corner}, {hold}")
+    seam_v = fem.seam_pairs.ravel()
+    s_v = np.repeat(fem.seam_s, 2)
+    surface = fem.mesh.nodes[:fem.n_surface]
+    d, j = cKDTree(fem.face.vertices[seam_v]).query(surface)
+    R = centre + (corner - centre) * np.minimum(1.0, 9.0 * s_v[j] ** 2)
+    w = _smoothstep((d - 0.5 * R) / (0.5 * R))
+    if hold > 0:
+        corners = np.stack([fem.face.landmark_position("mouth_corner_left"),
+                            fem.face.landmark_position("mouth_corner_right")])
+        dc, _ = cKDTree(corners).query(surface)
+        w = np.maximum(w, 1.0 - _smoothstep(dc / hold))
+    return np.tile(w, fem.layers + 1)
+
+
+def _smoothstep(x):
+    x = np.clip(x, 0.0, 1.0)
+    return x * x * (3.0 - 2.0 * x)
 
 
 def track_values(track: pd.DataFrame, rig) -> tuple[np.ndarray, float]:

@@ -54,6 +54,9 @@ EVAPORATION_RATE = 0.0
 GLUE = 0.08
 CENTRAL_GLUE = 0.18
 FORCE_DECAY = 0.99
+#: Saliva constitutive models: ``film`` (stress across the lips only, the default) or the
+#: seed's full ``neo-hookean`` solid.
+SALIVA_MODELS = ("film", "neo-hookean")
 
 #: Hex8 natural-coordinate signs of the nodes, order (−,−,−) (+,−,−) (+,+,−) (−,+,−), then z+.
 HEX_SIGNS = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
@@ -90,8 +93,9 @@ class SalivaParams:
     critical_moisture: float = CRITICAL_MOISTURE
     evaporation: float = EVAPORATION_RATE
     decay: float = FORCE_DECAY
-    rebond_strain: float = 0.05
+    rebond_strain: float = float("inf")
     squeeze: float = 0.25
+    model: str = "film"
 
     def __post_init__(self):
         if not np.isfinite(self.critical_moisture) or self.critical_moisture <= 0:
@@ -102,6 +106,8 @@ class SalivaParams:
             raise InputError(f"evaporation rate must be >= 0, got {self.evaporation}")
         if not 0.0 <= self.decay < 1.0:
             raise InputError(f"force decay must be in [0, 1), got {self.decay}")
+        if self.model not in SALIVA_MODELS:
+            raise InputError(f"saliva model must be one of {', '.join(SALIVA_MODELS)}, got {self.model!r}")
 
 
 def moisture(t, initial_moisture, evaporation):
@@ -174,6 +180,37 @@ def deformation_gradient(u, dNdX):
     ``u`` is (E, 8, 3) nodal displacements, ``dNdX`` from :func:`hex_centre_gradients`.
     """
     return np.eye(3) + np.einsum("eai,eaj->eij", u, dNdX)
+
+
+def hex_volumes(X):
+    """Reference volumes of hex8 elements from the centre Jacobian (8 det J), (E,)."""
+    X = np.asarray(X, dtype=np.float64)
+    J = np.einsum("eai,aj->eij", X, HEX_SIGNS / 8.0)
+    return 8.0 * np.linalg.det(J)
+
+
+def film_forces(F, axis, dNdX, volume, modulus):
+    """Internal nodal forces of a saliva *film*: stress across the lips only, (E, 8, 3).
+
+    A liquid film between the lips flows in its own plane (seed 000 §3.4.1:
+    "the possibility of flow within the saliva layer") and carries load only
+    across it. With the stretch Q = nᵀCn along the local y axis ``n`` and the
+    strain energy W = M/8 (Q − 1)² per reference volume (M the uniaxial-strain
+    modulus, K + 4μ/3 of the saliva),
+
+    .. math:: P = \\tfrac{M}{2}(Q - 1)\\,(F n) \\otimes n,\\qquad
+              f_a = V_0\\,P\\,\\nabla_X N_a ,
+
+    which for a small stretch ε across the film is the neo-Hookean uniaxial-strain
+    stress M ε, and is zero for any in-plane stretch, compression or shear of
+    the lips along each other (the full solid would answer those with its bulk
+    modulus, 25 times the lip tissue's: pressed, puckered lips then crush and
+    invert their own elements).
+    """
+    Fn = np.einsum("eij,ej->ei", F, axis)
+    Q = np.sum(Fn * Fn, axis=1)
+    g = np.einsum("eaj,ej->ea", dNdX, axis)
+    return (0.5 * modulus * (Q - 1.0) * volume)[:, None, None] * g[:, :, None] * Fn[:, None, :]
 
 
 def element_frames(X):
@@ -382,6 +419,11 @@ class SalivaBreaking:
         self.params = params
         self.glue = np.broadcast_to(np.asarray(glue, dtype=np.float64), (len(X),)).copy()
         self.axis = element_frames(X)[:, 1]
+        self.dNdX = hex_centre_gradients(X)
+        self.volume = hex_volumes(X)
+        from visemeface.physics.materials import SALIVA
+        self.modulus = SALIVA.K + 4.0 * SALIVA.mu / 3.0
+        self.film = params.model == "film"
         self.broken = np.zeros(len(X), dtype=bool)
         self.stored = np.zeros((len(X), 8, 3))
         self.stretch = np.ones(len(X))
@@ -413,7 +455,10 @@ class SalivaBreaking:
         strain = np.abs(C - np.eye(3)).max(axis=(1, 2))
         Z = self.breaking_points(t)
         self.stretch, self.breaking = Q, Z
-        out = np.array(forces, dtype=np.float64, copy=True)
+        if self.film:
+            out = film_forces(F, self.axis, self.dNdX, self.volume, self.modulus)
+        else:
+            out = np.array(forces, dtype=np.float64, copy=True)
         squeezed = Q < self.params.squeeze
         # Re-bond where the lips are back together near their rest shape.
         self.broken &= ~((Q <= 1.0) & (strain <= self.params.rebond_strain) & ~squeezed)
@@ -444,7 +489,7 @@ class SalivaBreaking:
             Z = Z0 if dry else self.breaking_points(t)
             self.breaking = Z
             _saliva_step(F, forces, elements, self.axis, Z, self.broken, self.stored, self.stretch, p.decay,
-                         p.rebond_strain, p.squeeze)
+                         p.rebond_strain, p.squeeze, self.film, self.dNdX, self.volume, self.modulus)
             return None
 
         return element_hook
@@ -472,7 +517,8 @@ from numba import njit  # noqa: E402
 
 
 @njit(cache=True)
-def _saliva_step(F, forces, elements, axis, Z, broken, stored, stretch, decay, rebond, squeeze):  # pragma: no cover
+def _saliva_step(F, forces, elements, axis, Z, broken, stored, stretch, decay, rebond, squeeze,
+                 film, dNdX, volume, modulus):  # pragma: no cover
     """:meth:`SalivaBreaking.update` in place over ``forces[elements]`` (same rule)."""
     for k in range(elements.shape[0]):
         e = elements[k]
@@ -482,6 +528,13 @@ def _saliva_step(F, forces, elements, axis, Z, broken, stored, stretch, decay, r
         a2 = F[e, 2, 0] * n0 + F[e, 2, 1] * n1 + F[e, 2, 2] * n2
         Q = a0 * a0 + a1 * a1 + a2 * a2
         stretch[k] = Q
+        if film:                                   # see film_forces
+            c = 0.5 * modulus * (Q - 1.0) * volume[k]
+            for a in range(8):
+                g = (dNdX[k, a, 0] * n0 + dNdX[k, a, 1] * n1 + dNdX[k, a, 2] * n2) * c
+                forces[e, a, 0] = g * a0
+                forces[e, a, 1] = g * a1
+                forces[e, a, 2] = g * a2
         J = (F[e, 0, 0] * (F[e, 1, 1] * F[e, 2, 2] - F[e, 1, 2] * F[e, 2, 1])
              - F[e, 0, 1] * (F[e, 1, 0] * F[e, 2, 2] - F[e, 1, 2] * F[e, 2, 0])
              + F[e, 0, 2] * (F[e, 1, 0] * F[e, 2, 1] - F[e, 1, 1] * F[e, 2, 0]))
