@@ -352,9 +352,9 @@ SPEECH_TRACKING_HZ = 1000.0
 #: Radii (m) of the lips' released band (no tracking spring) at the centre and toward the
 #: corners (:func:`release_weight`).
 RELEASE_CENTRE = 0.004
-RELEASE_CORNER = 0.03
+RELEASE_CORNER = 0.05
 #: Radius (m) around each mouth corner where the lips stay held (:func:`release_weight`).
-CORNER_HOLD = 0.004
+CORNER_HOLD = 0.006
 #: Least volume ratio J of a tissue element in the drive's target (see :meth:`FaceDrive.untangle`).
 MIN_JACOBIAN = 0.3
 
@@ -381,7 +381,8 @@ class PhysicsSettings:
     glue_file: str | None = None
     saliva: SalivaParams = field(default_factory=SalivaParams)
     tracking: float = TRACKING_HZ
-    lip_release: tuple[float, float] | None = (RELEASE_CENTRE, RELEASE_CORNER)
+    lip_release: tuple[float, float, float] | None = (RELEASE_CENTRE, RELEASE_CORNER, CORNER_HOLD)
+    release_floor: float = 0.0
     field_smoothing: int = 0
     min_jacobian: float = MIN_JACOBIAN
 
@@ -463,17 +464,23 @@ class StickySimulation:
             hourglass_kappa=settings.hourglass_kappa, fixed=self.drive.fixed_nodes,
             prescribed=[(self.drive.jaw_nodes, self.drive.jaw)],
             forces=[(np.arange(mesh.n_nodes), self.drive.force)],
-            element_hook=self.saliva.hook(fem.saliva), unchecked=fem.saliva,
+            element_hook=self.saliva.hook(fem.saliva, mesh.hexes[fem.saliva]), unchecked=fem.saliva,
             tracking=(settings.tracking, self.drive.target, self.drive.target_velocity))
+        self.saliva.node_displacement = lambda: self.solver._u_now
         if self.solver._track_k is not None:
             # Across the lips (y) the spring lets go of the lips near the seam, so the
             # glue, not the rig, decides when they part; along and out of the seam
             # (x, z) it keeps holding them (the free lips would otherwise lag and
             # buckle at the mouth corners).
             k = np.repeat(self.solver._track_k, 3, axis=1)
-            w = np.ones(mesh.n_nodes) if settings.lip_release is None else release_weight(fem, *settings.lip_release)
-            w[np.unique(mesh.hexes[fem.saliva])] = 0.0
-            k[:, 1] *= w
+            seam = np.unique(mesh.hexes[fem.saliva])
+            if settings.lip_release is None:
+                w = np.ones(mesh.n_nodes)
+                w[seam] = 0.0
+            else:
+                w = release_weight(fem, *settings.lip_release, seam_nodes=seam)
+            floor = (settings.release_floor / settings.tracking) ** 2
+            k[:, 1] *= floor + (1.0 - floor) * w
             self.solver._track_k = k
         self.rest_gaps = fem.rest_gaps
 
@@ -608,19 +615,19 @@ class _FaceSolver:
 
 
 def release_weight(fem, centre: float = RELEASE_CENTRE, corner: float = RELEASE_CORNER,
-                   hold: float = CORNER_HOLD) -> np.ndarray:
+                   hold: float = CORNER_HOLD, seam_nodes=None) -> np.ndarray:
     """Per FEM node, the weight of the tracking spring across the lips (y): 0 near the seam, 1 away.
 
     A node whose column (the surface vertex above it) lies ``d`` from the
     nearest seam vertex, at position ``s`` across the mouth, gets
 
     .. math:: w = \\mathrm{smoothstep}\\big((d - R/2) / (R/2)\\big),\\qquad
-              R(s) = R_c + (R_e - R_c)\\,\\min(1, 9 s^2)
+              R(s) = R_c + (R_e - R_c)\\,\\min(1, s^2)
 
     (``R_c`` = ``centre``, ``R_e`` = ``corner``): free within R/2 of the seam,
     held beyond R. The released band is narrow at the centre (the lips there
-    are held close to the rig, i.e. to the jaw and teeth) and wide from a third
-    of the way to the corners on (the lips there are free to follow the glue),
+    are held close to the rig, i.e. to the jaw and teeth) and widens toward the
+    corners (the lips there are free to follow the glue),
     so the jaw loads the saliva hardest at the centre and the seam unzips from
     the centre out (seed 000 §3.4.5: "the forces at the centre of the lips are
     often greater"). The mouth corners themselves, where the lips join, stay
@@ -635,14 +642,16 @@ def release_weight(fem, centre: float = RELEASE_CENTRE, corner: float = RELEASE_
     s_v = np.repeat(fem.seam_s, 2)
     surface = fem.mesh.nodes[:fem.n_surface]
     d, j = cKDTree(fem.face.vertices[seam_v]).query(surface)
-    R = centre + (corner - centre) * np.minimum(1.0, 9.0 * s_v[j] ** 2)
-    w = _smoothstep((d - 0.5 * R) / (0.5 * R))
+    R = centre + (corner - centre) * np.minimum(1.0, s_v[j] ** 2)
+    w = np.tile(_smoothstep((d - 0.5 * R) / (0.5 * R)), fem.layers + 1)
+    if seam_nodes is not None:
+        w[seam_nodes] = 0.0
     if hold > 0:
         corners = np.stack([fem.face.landmark_position("mouth_corner_left"),
                             fem.face.landmark_position("mouth_corner_right")])
         dc, _ = cKDTree(corners).query(surface)
-        w = np.maximum(w, 1.0 - _smoothstep(dc / hold))
-    return np.tile(w, fem.layers + 1)
+        w = np.maximum(w, np.tile(1.0 - _smoothstep(dc / hold), fem.layers + 1))
+    return w
 
 
 def _smoothstep(x):

@@ -182,35 +182,62 @@ def deformation_gradient(u, dNdX):
     return np.eye(3) + np.einsum("eai,eaj->eij", u, dNdX)
 
 
-def hex_volumes(X):
-    """Reference volumes of hex8 elements from the centre Jacobian (8 det J), (E,)."""
+#: Natural coordinate ξ of the film's two integration points along the seam.
+FILM_POINTS = (-1.0 / np.sqrt(3.0), 1.0 / np.sqrt(3.0))
+
+
+def film_gradients(X):
+    """Shape-function gradients and volume weights at the film's two points, (E, 2, 8, 3) and (E, 2).
+
+    The points are (ξ, η, ζ) = (±1/√3, 0, 0): two along the seam, one across and
+    through the film. One centre point would leave the film blind to its
+    keystone mode (one end of an element opening while the other closes, zero
+    mean stretch); two see each end. Weights 1·2·2 per point, so the two sum to
+    the element's volume.
+    """
     X = np.asarray(X, dtype=np.float64)
-    J = np.einsum("eai,aj->eij", X, HEX_SIGNS / 8.0)
-    return 8.0 * np.linalg.det(J)
+    S = HEX_SIGNS
+    grads, vols = [], []
+    for g in FILM_POINTS:
+        dN = np.stack([S[:, 0] / 8.0, S[:, 1] / 8.0 * (1 + S[:, 0] * g), S[:, 2] / 8.0 * (1 + S[:, 0] * g)], axis=1)
+        J = np.einsum("eai,aj->eij", X, dN)
+        grads.append(np.einsum("aj,eji->eai", dN, np.linalg.inv(J)))
+        vols.append(4.0 * np.linalg.det(J))
+    return np.stack(grads, axis=1), np.stack(vols, axis=1)
 
 
-def film_forces(F, axis, dNdX, volume, modulus):
-    """Internal nodal forces of a saliva *film*: stress across the lips only, (E, 8, 3).
+def film_forces(u, axis, grads, volumes, modulus):
+    """Internal nodal forces (E, 8, 3) and stretches Q (E, 2) of a saliva *film*.
 
     A liquid film between the lips flows in its own plane (seed 000 §3.4.1:
     "the possibility of flow within the saliva layer") and carries load only
     across it. With the stretch Q = nᵀCn along the local y axis ``n`` and the
     strain energy W = M/8 (Q − 1)² per reference volume (M the uniaxial-strain
-    modulus, K + 4μ/3 of the saliva),
+    modulus, K + 4μ/3 of the saliva), at each of the two points of
+    :func:`film_gradients`
 
     .. math:: P = \\tfrac{M}{2}(Q - 1)\\,(F n) \\otimes n,\\qquad
-              f_a = V_0\\,P\\,\\nabla_X N_a ,
+              f_a = \\sum_g V_g\\,P_g\\,\\nabla_X N_a(g) ,
 
     which for a small stretch ε across the film is the neo-Hookean uniaxial-strain
     stress M ε, and is zero for any in-plane stretch, compression or shear of
     the lips along each other (the full solid would answer those with its bulk
     modulus, 25 times the lip tissue's: pressed, puckered lips then crush and
     invert their own elements).
+
+    Parameters
+    ----------
+    u : (E, 8, 3) element node displacements.
+    axis : (E, 3) unit local y axes.
+    grads, volumes : from :func:`film_gradients`.
+    modulus : float
     """
-    Fn = np.einsum("eij,ej->ei", F, axis)
-    Q = np.sum(Fn * Fn, axis=1)
-    g = np.einsum("eaj,ej->ea", dNdX, axis)
-    return (0.5 * modulus * (Q - 1.0) * volume)[:, None, None] * g[:, :, None] * Fn[:, None, :]
+    F = np.eye(3) + np.einsum("eai,egaj->egij", u, grads)
+    Fn = np.einsum("egij,ej->egi", F, axis)
+    Q = np.sum(Fn * Fn, axis=2)
+    g = np.einsum("egaj,ej->ega", grads, axis)
+    c = 0.5 * modulus * (Q - 1.0) * volumes                     # (E, 2)
+    return np.einsum("eg,ega,egi->eai", c, g, Fn), Q
 
 
 def element_frames(X):
@@ -419,8 +446,11 @@ class SalivaBreaking:
         self.params = params
         self.glue = np.broadcast_to(np.asarray(glue, dtype=np.float64), (len(X),)).copy()
         self.axis = element_frames(X)[:, 1]
-        self.dNdX = hex_centre_gradients(X)
-        self.volume = hex_volumes(X)
+        self.X = X
+        self.grads, self.volumes = film_gradients(X)
+        #: Callable returning the current node displacements (n, 3) for the compiled hook
+        #: (the film needs them); set by whoever runs the solver.
+        self.node_displacement = None
         from visemeface.physics.materials import SALIVA
         self.modulus = SALIVA.K + 4.0 * SALIVA.mu / 3.0
         self.film = params.model == "film"
@@ -434,7 +464,7 @@ class SalivaBreaking:
         p = self.params
         return breaking_point(moisture(t, p.initial_moisture, p.evaporation), p.critical_moisture, self.glue)
 
-    def update(self, t: float, F, forces):
+    def update(self, t: float, F, forces, u=None):
         """Advance the state to time ``t`` and return the forces to assemble.
 
         Parameters
@@ -442,7 +472,10 @@ class SalivaBreaking:
         t : float
             Simulated time (s).
         F : (E, 3, 3) current deformation gradients of the saliva elements.
-        forces : (E, 8, 3) unmodified internal element forces.
+        forces : (E, 8, 3) unmodified internal element forces (ignored by the film model).
+        u : (E, 8, 3), optional
+            Element node displacements (the film model); default the affine
+            displacement of ``F`` about each element's centre.
 
         Returns
         -------
@@ -450,15 +483,17 @@ class SalivaBreaking:
         """
         F = np.asarray(F, dtype=np.float64)
         Q = stretch_across(F, self.axis)
+        if self.film:
+            if u is None:
+                Xc = self.X - self.X.mean(axis=1, keepdims=True)
+                u = np.einsum("eij,eaj->eai", F - np.eye(3), Xc)
+            film, _ = film_forces(u, self.axis, self.grads, self.volumes, self.modulus)
         Q = np.where(np.linalg.det(F) > 0.0, Q, 1e300)     # folded over: cannot push
         C = np.swapaxes(F, 1, 2) @ F
         strain = np.abs(C - np.eye(3)).max(axis=(1, 2))
         Z = self.breaking_points(t)
         self.stretch, self.breaking = Q, Z
-        if self.film:
-            out = film_forces(F, self.axis, self.dNdX, self.volume, self.modulus)
-        else:
-            out = np.array(forces, dtype=np.float64, copy=True)
+        out = film if self.film else np.array(forces, dtype=np.float64, copy=True)
         squeezed = Q < self.params.squeeze
         # Re-bond where the lips are back together near their rest shape.
         self.broken &= ~((Q <= 1.0) & (strain <= self.params.rebond_strain) & ~squeezed)
@@ -473,9 +508,11 @@ class SalivaBreaking:
         out[squeezed] = 0.0
         return out
 
-    def hook(self, elements):
+    def hook(self, elements, nodes=None):
         """The TLED solver's ``element_hook`` for saliva elements at mesh ids ``elements``.
 
+        ``nodes`` (E, 8) are the elements' node ids (needed by the film model,
+        which reads the displacements from :attr:`node_displacement`).
         ``hook(step, t, F, forces)`` applies :meth:`update`'s rule to
         ``forces[elements]`` in place, in one compiled pass (no allocation per
         step); breaking points are recomputed only when moisture changes.
@@ -485,11 +522,17 @@ class SalivaBreaking:
         dry = p.evaporation == 0.0
         Z0 = self.breaking_points(0.0)
 
+        if self.film and nodes is None:
+            raise ValueError("the film model's hook needs the saliva elements' node ids")
+        nodes = np.ascontiguousarray(nodes if nodes is not None else np.zeros((len(elements), 8)), dtype=np.int64)
+        empty = np.zeros((1, 3))
+
         def element_hook(step, t, F, forces):
             Z = Z0 if dry else self.breaking_points(t)
             self.breaking = Z
+            u = self.node_displacement() if self.film else empty
             _saliva_step(F, forces, elements, self.axis, Z, self.broken, self.stored, self.stretch, p.decay,
-                         p.rebond_strain, p.squeeze, self.film, self.dNdX, self.volume, self.modulus)
+                         p.rebond_strain, p.squeeze, self.film, u, nodes, self.grads, self.volumes, self.modulus)
             return None
 
         return element_hook
@@ -518,7 +561,7 @@ from numba import njit  # noqa: E402
 
 @njit(cache=True)
 def _saliva_step(F, forces, elements, axis, Z, broken, stored, stretch, decay, rebond, squeeze,
-                 film, dNdX, volume, modulus):  # pragma: no cover
+                 film, u, nodes, grads, volumes, modulus):  # pragma: no cover
     """:meth:`SalivaBreaking.update` in place over ``forces[elements]`` (same rule)."""
     for k in range(elements.shape[0]):
         e = elements[k]
@@ -527,14 +570,27 @@ def _saliva_step(F, forces, elements, axis, Z, broken, stored, stretch, decay, r
         a1 = F[e, 1, 0] * n0 + F[e, 1, 1] * n1 + F[e, 1, 2] * n2
         a2 = F[e, 2, 0] * n0 + F[e, 2, 1] * n1 + F[e, 2, 2] * n2
         Q = a0 * a0 + a1 * a1 + a2 * a2
-        stretch[k] = Q
         if film:                                   # see film_forces
-            c = 0.5 * modulus * (Q - 1.0) * volume[k]
             for a in range(8):
-                g = (dNdX[k, a, 0] * n0 + dNdX[k, a, 1] * n1 + dNdX[k, a, 2] * n2) * c
-                forces[e, a, 0] = g * a0
-                forces[e, a, 1] = g * a1
-                forces[e, a, 2] = g * a2
+                for i in range(3):
+                    forces[e, a, i] = 0.0
+            for gp in range(2):
+                # F n at the point: n + sum_a u_a (grad_a . n)
+                f0, f1, f2 = n0, n1, n2
+                for a in range(8):
+                    gn = grads[k, gp, a, 0] * n0 + grads[k, gp, a, 1] * n1 + grads[k, gp, a, 2] * n2
+                    node = nodes[k, a]
+                    f0 += u[node, 0] * gn
+                    f1 += u[node, 1] * gn
+                    f2 += u[node, 2] * gn
+                Qg = f0 * f0 + f1 * f1 + f2 * f2
+                c = 0.5 * modulus * (Qg - 1.0) * volumes[k, gp]
+                for a in range(8):
+                    gn = (grads[k, gp, a, 0] * n0 + grads[k, gp, a, 1] * n1 + grads[k, gp, a, 2] * n2) * c
+                    forces[e, a, 0] += gn * f0
+                    forces[e, a, 1] += gn * f1
+                    forces[e, a, 2] += gn * f2
+        stretch[k] = Q
         J = (F[e, 0, 0] * (F[e, 1, 1] * F[e, 2, 2] - F[e, 1, 2] * F[e, 2, 1])
              - F[e, 0, 1] * (F[e, 1, 0] * F[e, 2, 2] - F[e, 1, 2] * F[e, 2, 0])
              + F[e, 0, 2] * (F[e, 1, 0] * F[e, 2, 1] - F[e, 1, 1] * F[e, 2, 0]))
