@@ -117,7 +117,7 @@ def physics_settings(args):
         if given:
             raise InputError(f"{given[0]} needs --physics sticky or elastic")
         return None
-    from visemeface.physics.drive import SPEECH_TRACKING_HZ, PhysicsSettings
+    from visemeface.physics.drive import PhysicsSettings
     from visemeface.physics.saliva import GLUE, SalivaParams
 
     glue = GLUE if args.glue is None else args.glue
@@ -133,7 +133,7 @@ def physics_settings(args):
     except InputError as e:
         raise InputError(str(e).replace("moisture must", "--moisture must")
                          .replace("evaporation rate must", "--evaporation must")) from None
-    return PhysicsSettings(glue=glue, glue_profile=args.glue_profile, saliva=saliva, tracking=SPEECH_TRACKING_HZ)
+    return PhysicsSettings(glue=glue, glue_profile=args.glue_profile, saliva=saliva)
 
 
 #: Longest utterance one run animates (s): longer means wrong units far more often than a 3-hour take.

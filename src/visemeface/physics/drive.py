@@ -7,11 +7,11 @@ without saliva, its equilibrium *is* that posture:
 1. **Kinematic field.** U(**a**) on every FEM node: the rig's displacement on
    the surface nodes; on the bone side, zero for the skull and the jaw's
    rotation for the jaw nodes; linear through the tissue's depth in between.
-2. **Jaw and lip muscle layer.** The bone-side nodes are *prescribed*
-   U(**a**): the rig's jaw rotation with the jaw weight of the vertex above;
-   under the lips (``fem.lip_weight``) the rig's full field, the lips' deep
-   layer being their own muscle (orbicularis oris) rather than bone; nodes
-   with neither (the skull) are fixed. The bone is moved, not pushed.
+2. **Jaw.** The bone-side nodes are *prescribed* U(**a**): the rig's jaw
+   rotation with the jaw weight of the vertex above; nodes of weight 0 (the
+   skull) are fixed. The bone is moved, not pushed. Under the lips
+   (``fem.lip_weight``) the bone side is the lips' own muscle layer
+   (orbicularis oris): free, like the tissue above it.
 3. **Muscle forces.** The external force on the free nodes is the internal
    elastic force of the soft tissue held in that field,
 
@@ -22,6 +22,18 @@ without saliva, its equilibrium *is* that posture:
    boundary values the static balance F_int(u) = f holds at u = U(**a**), so
    with no glue the damped dynamics settle on the kinematic posture; the
    saliva (excluded from the calibration) only changes how the lips get there.
+
+4. **Tracking spring.** Dead loads on tissue this soft (μ 800 Pa) have
+   unstable equilibria (lips snap 10-20 mm away on rounded visemes and
+   closures), so every free node also feels m (2π f)² (U(t) − u), f = 1 kHz,
+   which vanishes at the posture. Across the lips (y) the spring lets go in a
+   band around the seam (:func:`release_weight`), so there the glue, not the
+   rig, decides when the lips part: narrow at the centre, wide toward the
+   corners, held at the corners themselves. This is what makes the seam
+   unzip from the centre over several frames.
+5. **Drag relative to the posture.** The seed's mass damping α m v is taken
+   relative to the moving posture, α m (v − dU/dt), so the free lips do not
+   lag behind a fast gesture; at rest it is the seed's damping.
 
 Forces and prescribed displacements are computed at the track's frame times
 and linearly interpolated in between, per time step.
@@ -340,17 +352,10 @@ class FaceDrive:
 
 PHYSICS = ("sticky", "elastic")
 #: Frequency (Hz) of the mass-proportional spring that holds each free node
-#: toward its kinematic position (see :class:`PhysicsSettings`).
+#: toward its kinematic position (module docstring, item 4).
 TRACKING_HZ = 1000.0
-#: Tracking frequency for speech (``speak --physics``): the drive's dead loads
-#: F_int(U) hold the soft tissue (μ 800 Pa) at strains where that equilibrium is
-#: unstable (the lips snap 10-20 mm away and invert within a few ms on /w ah f ay/);
-#: a spring m (2π·1000 Hz)² (U − u) on every free node except the lip edges (the
-#: saliva's nodes) keeps the 3 s example stable. The seed's scenarios (simulate)
-#: run without it (their zipper needs the lips free).
-SPEECH_TRACKING_HZ = 1000.0
-#: Radii (m) of the lips' released band (no tracking spring) at the centre and toward the
-#: corners (:func:`release_weight`).
+#: Radii (m) of the lips' released band (no tracking spring across the lips) at the
+#: centre and at the corners (:func:`release_weight`).
 RELEASE_CENTRE = 0.004
 RELEASE_CORNER = 0.05
 #: Radius (m) around each mouth corner where the lips stay held (:func:`release_weight`).
@@ -366,9 +371,12 @@ class PhysicsSettings:
     ``glue`` is the uniform glue strength K_glue; ``glue_profile`` a profile
     string (:func:`visemeface.physics.saliva.parse_glue_profile`) applied over
     it; ``glue_file`` a CSV (:func:`visemeface.physics.saliva.read_glue_file`).
-    ``tracking`` (Hz, 0 = off) adds to every free node i but the lip edges'
-    the force m_i (2π f)² (U_i(t) − u_i) toward its kinematic position (equilibrium
-    unchanged, unstable modes damped out; see :data:`SPEECH_TRACKING_HZ`).
+    ``tracking`` (Hz, 0 = off) adds to every free node i the force
+    m_i (2π f)² (U_i(t) − u_i) toward its kinematic position (equilibrium
+    unchanged, unstable modes held). ``lip_release`` (centre radius, corner
+    radius, corner hold; m) is where it lets go across the lips
+    (:func:`release_weight`; None: only at the saliva's nodes);
+    ``release_floor`` (Hz) keeps a weaker spring there.
     ``min_jacobian`` bounds the target's volume ratio (:meth:`FaceDrive.untangle`);
     ``field_smoothing`` averages the rig's surface field over quad neighbours.
     """
