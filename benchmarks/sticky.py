@@ -58,7 +58,7 @@ def bench_fem_face(seconds: float, threads: int) -> None:
 def bench_speak(threads: int) -> None:
     from visemeface.face.procedural import default_face
     from visemeface.muscles.rig import MuscleRig
-    from visemeface.physics.drive import SPEECH_TRACKING_HZ, PhysicsSettings, simulate_track
+    from visemeface.physics.drive import PhysicsSettings, simulate_track
     from visemeface.physics.tled import set_threads
     from visemeface.postures.library import load_visemes
     from visemeface.render.renderer import Renderer
@@ -74,7 +74,7 @@ def bench_speak(threads: int) -> None:
     ranges = {n: tuple(r) for n, r in zip(rig.names, rig.ranges)}           # as speak builds it
     track = activation_track(segments, load_visemes(rig=rig), fps=30, ranges=ranges)
     frames = simulate_track(face, rig, track, physics="sticky",
-                            settings=PhysicsSettings(tracking=SPEECH_TRACKING_HZ))
+                            settings=PhysicsSettings())
     renderer = Renderer(face, size=(512, 512), view="face")
     n = 0
     for v in frames:

@@ -13,11 +13,11 @@ zipper       sticky (glue 0.08) vs elastic: when and where the lips part; saliva
              order at 1 kHz; opening width per 60-fps frame from the mesh and from the
              seed-001 analysis of rendered frames
 equilibrium  RMS lip difference sticky vs elastic once open wide (target <= 1 %)
-merge        central glue 0.18: opening count 2 -> 1 and the width jump at the merge
+merge        central glue 0.18 at 60 fps: opening count 2 -> 1 and the width jump at the merge (mesh, video)
 asymmetry    one-sided activation and one-sided glue: which side opens first
 evaporation  the "open" scenario twice with evaporation: jaw at saliva failure, 1st vs 2nd opening
-speech       the 3 s example as `speak --physics` runs it (tracking spring 1000 Hz), sticky and elastic:
-             completes without inversion? lip RMS vs the kinematic posture per frame; and without tracking
+speech       "Bob moves five boats" (closures) and the 3 s example as `speak --physics` runs them, sticky
+             and elastic: completes? lip RMS vs the kinematic posture; how far sticky and elastic differ
 Pictures go to docs/images/sticky_*.png.
 """
 
@@ -133,32 +133,44 @@ def fig_zipper(fem, rig):
     for p in ("sticky", "elastic"):
         _, frames = run(fem, rig, tr, physics=p)
         prof, imgs = mouth_profile(fem, frames, 60)
+        vw = prof["width"].to_numpy()
+        first = int(np.argmax(vw > 0)) if (vw > 0).any() else 0
+        full = int(np.argmax(vw > 0.9)) if (vw > 0.9).any() else None
         emit(figure="zipper_60fps", physics=p, mesh_open_span=[round(f["open_span"], 3) for f in frames],
-             video_width=np.round(prof["width"].to_numpy(), 3), video_count=prof["count"].to_numpy())
-        strips.append(np.concatenate([im[140:372] for im in imgs[4:14:2]], axis=1))
+             video_width=np.round(vw, 3), video_count=prof["count"].to_numpy(), video_first_open_frame=first,
+             video_frames_to_90pct_width=None if full is None else full - first)
+        if p == "sticky":
+            pick = list(range(max(first - 1, 0), min(first + 6, len(imgs))))
+        strips.append(np.concatenate([imgs[i][140:372] for i in pick], axis=1))
     from visemeface.render.export import write_png
     IMAGES.mkdir(parents=True, exist_ok=True)
     write_png(IMAGES / "sticky_zipper.png", np.concatenate(strips, axis=0)[::2, ::2].copy())
 
 
 def fig_merge(fem, rig):
-    tr = ramp(rig, 1000, hold=0.05)
-    _, frames = run(fem, rig, tr, glue_profile="centre=0.18")
-    counts = [f["open_count"] for f in frames]
-    span = np.array([f["open_span"] for f in frames])
-    two = counts.index(2) if 2 in counts else None
-    merge = (two + counts[two:].index(1)) if two is not None and 1 in counts[two:] else None
-    emit(figure="merge", frames_with_two_openings=int(sum(c == 2 for c in counts)),
-         first_two_s=None if two is None else frames[two]["t"], merge_s=None if merge is None else frames[merge]["t"],
-         span_jump_at_merge=None if merge is None else round(float(span[merge] - span[merge - 1]), 3),
-         largest_span_jump=round(float(np.diff(span).max()), 3))
-    if two is not None:
+    """Central glue 0.18 at 60 fps (the seed's camera): two openings, then one; mesh and video."""
+    tr = ramp(rig, 60, start=0.05, ramp_s=0.35, hold=0.1)
+    strips = []
+    for name, kw in (("central glue 0.18", {"glue_profile": "centre=0.18"}), ("uniform glue 0.08", {})):
+        _, frames = run(fem, rig, tr, **kw)
+        counts = [f["open_count"] for f in frames]
+        span = np.array([f["open_span"] for f in frames])
+        two = [i for i, c in enumerate(counts) if c == 2]
+        merge = two[-1] + 1 if two and two[-1] + 1 < len(counts) else None
+        prof, imgs = mouth_profile(fem, frames, 60)
+        vw = prof["width"].to_numpy()
+        dvw = np.diff(vw)
+        emit(figure="merge", case=name, mesh_open_count=counts, mesh_frames_with_two=len(two),
+             mesh_merge_frame=merge, mesh_span_jump_at_merge=None if merge is None else round(float(span[merge] - span[merge - 1]), 3),
+             video_count=prof["count"].to_numpy(), video_frames_with_two=int((prof["count"].to_numpy() == 2).sum()),
+             video_width=np.round(vw, 3), video_width_derivative_max_frame=int(np.argmax(dvw)) + 1,
+             video_width_derivative_max=round(float(dvw.max()), 3))
+        if two:
+            strips.append(np.concatenate([imgs[i][140:372] for i in range(max(two[0] - 2, 0), min(two[0] + 6, len(imgs)))],
+                                         axis=1))
+    if strips:
         from visemeface.render.export import write_png
-        from visemeface.render.renderer import Renderer
-        r = Renderer(fem.face, size=(512, 512), view="mouth")
-        pick = [max(two - 3, 0), two, merge or two + 2, (merge or two) + 3]
-        write_png(IMAGES / "sticky_merge.png",
-                  np.concatenate([r.render(frames[i]["d"])[140:372] for i in pick], axis=1)[::2, ::2].copy())
+        write_png(IMAGES / "sticky_merge.png", strips[0][::2, ::2].copy())
 
 
 def fig_asymmetry(fem, rig):
@@ -197,34 +209,40 @@ def fig_evaporation(fem, rig, evaporation=40.0):
 
 
 def fig_speech(fem, rig):
-    """The 3 s example as ``speak --physics sticky|elastic`` runs it: completes? lip RMS vs kinematic."""
+    """Utterances as ``speak --physics sticky|elastic`` runs them: complete? lips vs kinematic, sticky vs elastic."""
     from visemeface.postures.library import load_visemes
     from visemeface.resources import transcripts_path
     from visemeface.speech.timeline import activation_track
     from visemeface.speech.transcripts import read_transcript
-    segments = read_transcript(transcripts_path("one_five_zero_zero_six.txt"))
     ranges = {n: tuple(r) for n, r in zip(rig.names, rig.ranges)}
-    track = activation_track(segments, load_visemes(rig=rig), fps=30, ranges=ranges)
     lips = lip_ids(fem)
-    for tracking in (drive.SPEECH_TRACKING_HZ, 0.0):
+    for name in ("bob_moves_five_boats.txt", "one_five_zero_zero_six.txt"):
+        track = activation_track(read_transcript(transcripts_path(name)), load_visemes(rig=rig), fps=30, ranges=ranges)
+        verts = {}
         for physics in ("sticky", "elastic"):
             t0 = time.perf_counter()
-            rms, error = [], None
+            rms, intact, error = [], [], None
             try:
-                sim, frames = run(fem, rig, track, physics=physics, tracking=tracking)
+                sim, frames = run(fem, rig, track, physics=physics)
                 for f in frames:
                     kin = rig.pose(sim.values[f["i"]]) - rig.face.vertices
                     got = f["v"] - fem.face.vertices
                     rms.append(float(np.sqrt(np.mean(np.sum((got[lips] - kin[lips]) ** 2, axis=1)))))
+                    intact.append(1.0 - f["broken_fraction"])
+                verts[physics] = np.stack([f["v"][lips] for f in frames])
             except Exception as e:
                 error = f"{type(e).__name__}: {str(e)[:160]}"
+            wall = time.perf_counter() - t0
             rms = np.array(rms) / fem.mouth_width
-            emit(figure="speech", physics=physics, tracking_hz=tracking, frames=len(track), completed=error is None,
+            emit(figure="speech", transcript=name, physics=physics, frames=len(track), completed=error is None,
                  error=error, lip_rms_vs_kinematic_max=round(float(rms.max()), 4) if len(rms) else None,
                  lip_rms_vs_kinematic_median=round(float(np.median(rms)), 4) if len(rms) else None,
-                 wall_s=round(time.perf_counter() - t0, 1))
-            if tracking == 0.0:
-                break          # without tracking: only show that it fails (and where)
+                 frames_with_saliva_holding=int(np.sum(np.array(intact) > 0)) if intact else None,
+                 wall_s=round(wall, 1), s_per_simulated_s=round(wall / max(track.index[-1], 1e-9), 1))
+        if len(verts) == 2:
+            d = np.sqrt(np.mean(np.sum((verts["sticky"] - verts["elastic"]) ** 2, axis=2), axis=1)) / fem.mouth_width
+            emit(figure="speech_sticky_vs_elastic", transcript=name, lip_rms_max=round(float(d.max()), 4),
+                 frames_differing_over_1pct=int((d > 0.01).sum()), frames=len(d))
 
 
 def main(argv=None):
@@ -232,9 +250,9 @@ def main(argv=None):
     ap.add_argument("--resolution", type=int, help="face vertices (default: the default face)")
     ap.add_argument("--calibration-resolution", type=int, default=1500,
                     help="face for the 56-viseme calibration sweep (default 1500: coarse, fast)")
-    ap.add_argument("--calibration-tracking", type=float, default=0.0,
-                    help="tracking spring (Hz) in the calibration sweep (default 0: dead loads only; "
-                    "speak --physics uses %g)" % drive.SPEECH_TRACKING_HZ)
+    ap.add_argument("--calibration-tracking", type=float, default=drive.TRACKING_HZ,
+                    help="tracking spring (Hz) in the calibration sweep (default %g, the drive's; "
+                    "0: dead loads only)" % drive.TRACKING_HZ)
     ap.add_argument("--only", help="comma-separated figures")
     ap.add_argument("--threads", type=int, default=None)
     args = ap.parse_args(argv)

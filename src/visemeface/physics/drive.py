@@ -328,8 +328,9 @@ class FaceDrive:
         w = self._interval(t)
         if getattr(self, "_tseg", None) is None or self._tseg[0] != self._i:
             ua, ub = self.keyframe(self._i)[2], self.keyframe(self._i + 1)[2]
-            self._tseg = (self._i, ua, ub - ua, np.empty_like(ua))
-        _, ua, du, buf = self._tseg
+            du = ub - ua
+            self._tseg = (self._i, ua, du, np.empty_like(ua), du * self.fps)
+        _, ua, du, buf, _ = self._tseg
         np.multiply(du, w, out=buf)
         buf += ua
         return buf
@@ -337,7 +338,7 @@ class FaceDrive:
     def target_velocity(self, t: float) -> np.ndarray:
         """dU/dt (n, 3) at time ``t``: constant between frames (the field is linear there)."""
         self.target(t)
-        return self._tseg[2] * self.fps
+        return self._tseg[4]
 
     def jaw(self, t: float) -> np.ndarray:
         """Prescribed jaw-node displacements at time ``t``, linear between frames."""
@@ -595,18 +596,23 @@ class _FaceSolver:
 
             def _external(self, t):
                 R = super()._external(t)
+                buf = self._buf
                 if self._track_k is not None:
                     # R was copied fresh from the drive's buffer: add k (U(t) - u).
-                    R += self._track_k * (self._track_target(t) - self._u_now)
+                    np.subtract(self._track_target(t), self._u_now, out=buf)
+                    buf *= self._track_k
+                    R += buf
                 if self._drag is not None:
                     # Damping relative to the moving posture: + α m dU/dt.
-                    R += self._drag * self._target_velocity(t)
+                    np.multiply(self._drag, self._target_velocity(t), out=buf)
+                    R += buf
                 return R
 
         solver = FaceSolver(*args, **kwargs)
         hz, target = tracking[:2]
         velocity = tracking[2] if len(tracking) > 2 else None
         solver._drag = None
+        solver._buf = np.zeros((solver.mesh.n_nodes, 3))
         if velocity is not None and solver.damping > 0:
             solver._drag = (solver.damping * solver.mass)[:, None] * solver.free.reshape(len(solver.mass), -1)[:, :1]
             solver._target_velocity = velocity
