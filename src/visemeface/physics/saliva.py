@@ -87,7 +87,9 @@ class SalivaParams:
         Per-step force factor of a broken element (seed: 0.99).
     rebond_strain : float
         A broken element re-bonds when the lips are back in contact (Q ≤ 1)
-        and its Green strain is small: max |C − I| ≤ this.
+        and its Green strain is small: max |C − I| ≤ this. Default ∞: on any
+        contact, however the lips are gathered or slid (the film re-forms
+        between them; its in-plane shape carries no stress).
     squeeze : float
         Below this Q the saliva is squeezed out from between pressed lips: no
         force, counted broken, until the lips are back apart to its thickness.
