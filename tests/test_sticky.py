@@ -127,7 +127,7 @@ def test_pressed_puckered_lips_rebond_and_stick_again():
 def _film(u, X):
     from visemeface.physics.materials import SALIVA
     grads, vols = sv.film_gradients(X)
-    pull, push, _ = sv.film_forces(u, sv.element_frames(X)[:, 1], grads, vols, SALIVA.K + 4 * SALIVA.mu / 3)
+    pull, push, _ = sv.film_forces(u, sv.element_frames(X)[:, 1], grads, vols, SALIVA.p_wave_modulus)
     return pull + push
 
 
@@ -162,7 +162,7 @@ def test_film_forces_are_the_gradient_of_its_energy(seed, squash):
     rng = np.random.default_rng(seed)
     X = _box()
     grads, V = sv.film_gradients(X)
-    n, M = sv.element_frames(X)[:, 1], SALIVA.K + 4 * SALIVA.mu / 3
+    n, M = sv.element_frames(X)[:, 1], SALIVA.p_wave_modulus
     u = 1e-5 * rng.normal(size=(1, 8, 3))
     u[0, :, 1] += squash * X[0, :, 1]
 

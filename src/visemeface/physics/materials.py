@@ -66,9 +66,14 @@ class NeoHookean:
         return self.K - 2.0 * self.mu / 3.0
 
     @property
+    def p_wave_modulus(self) -> float:
+        """Small-strain uniaxial-strain (P-wave) modulus M = K + 4μ/3 (Pa)."""
+        return self.K + 4.0 * self.mu / 3.0
+
+    @property
     def wave_speed(self) -> float:
-        """Dilatational wave speed c = sqrt((K + 4μ/3)/ρ) (m/s)."""
-        return float(np.sqrt((self.K + 4.0 * self.mu / 3.0) / self.rho))
+        """Dilatational wave speed c = sqrt(M/ρ), M = K + 4μ/3 (m/s)."""
+        return float(np.sqrt(self.p_wave_modulus / self.rho))
 
     @property
     def shear_wave_speed(self) -> float:

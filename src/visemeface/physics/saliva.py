@@ -492,7 +492,7 @@ class SalivaBreaking:
         #: (the film needs them); set by whoever runs the solver.
         self.node_displacement = None
         from visemeface.physics.materials import SALIVA
-        self.modulus = SALIVA.K + 4.0 * SALIVA.mu / 3.0
+        self.modulus = SALIVA.p_wave_modulus
         self.film = params.model == "film"
         self.broken = np.zeros(len(X), dtype=bool)
         #: Squeezed out (no film) until the lips are back apart to the film's thickness.
