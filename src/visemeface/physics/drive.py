@@ -178,16 +178,15 @@ class FaceDrive:
         # vertex above it, so bone and skin follow one smooth weight and the jaw
         # line tears no element: nodes of weight 0 (the skull) are fixed, the
         # others prescribed.
-        # Under the lips the bone side is the lips' own muscle layer: it follows
-        # the rig's full field there (blended by ``fem.lip_weight``).
+        # Under the lips the bone side is the lips' own muscle layer: its target is
+        # the rig's full field there (blended by ``fem.lip_weight``); it is
+        # prescribed that field, or with ``free_lips`` left free.
         inner = mesh.node_sets["inner"]
         w = rig.jaw_weight[fem.surface_vertices[inner - L * S]]
         lam = fem.lip_weight if fem.lip_weight is not None else np.zeros(S)
         self._lip = lam[inner - L * S]
         under_lips = self._lip > 0
         moving = (w != 0) | under_lips
-        #: Bone-side nodes under the lips left free (the lips' muscle layer moves with the tissue).
-        self.free_nodes = inner[under_lips] if free_lips else inner[:0]
         self.fixed_nodes = inner[~moving]
         self.jaw_nodes = inner[moving & ~under_lips] if free_lips else inner[moving]
         self._inner = inner
@@ -303,50 +302,47 @@ class FaceDrive:
         return self._cache[k]
 
     def _interval(self, t: float):
-        """Frame index i and weight w with t between frames i and i + 1 (cached loads)."""
+        """Weight w of time ``t`` between frames i and i + 1; caches that segment's loads.
+
+        Per segment: force, jaw and target at frame i, their change to frame
+        i + 1, the target's velocity (constant in between) and output buffers.
+        """
         f = (t + self.offset) * self.fps
         i = int(f + 1e-9)
         if i != self._i:
-            fa, ja, _ = self.keyframe(i)
-            fb, jb, _ = self.keyframe(i + 1)
+            fa, ja, ua = self.keyframe(i)
+            fb, jb, ub = self.keyframe(i + 1)
             self._i = i
-            self._seg = (fa, fb - fa, ja, jb - ja)
-            self._fbuf = np.empty_like(fa)
-            self._jbuf = np.empty_like(ja)
+            du = ub - ua
+            self._seg = {"force": (fa, fb - fa, np.empty_like(fa)), "jaw": (ja, jb - ja, np.empty_like(ja)),
+                         "target": (ua, du, np.empty_like(ua))}
+            self._velocity = du * self.fps
         return min(max(f - i, 0.0), 1.0)
+
+    def _lerp(self, name: str, t: float) -> np.ndarray:
+        """``name`` (force, jaw or target) at time ``t``, linear between frames, in its buffer."""
+        w = self._interval(t)
+        a, d, buf = self._seg[name]
+        np.multiply(d, w, out=buf)
+        buf += a
+        return buf
 
     def force(self, t: float) -> np.ndarray:
         """External nodal forces at time ``t``, linear between frames."""
-        w = self._interval(t)
-        fa, df = self._seg[0], self._seg[1]
-        np.multiply(df, w, out=self._fbuf)
-        self._fbuf += fa
-        return self._fbuf
+        return self._lerp("force", t)
 
     def target(self, t: float) -> np.ndarray:
         """The kinematic field U (n, 3) at time ``t``, linear between frames."""
-        w = self._interval(t)
-        if getattr(self, "_tseg", None) is None or self._tseg[0] != self._i:
-            ua, ub = self.keyframe(self._i)[2], self.keyframe(self._i + 1)[2]
-            du = ub - ua
-            self._tseg = (self._i, ua, du, np.empty_like(ua), du * self.fps)
-        _, ua, du, buf, _ = self._tseg
-        np.multiply(du, w, out=buf)
-        buf += ua
-        return buf
+        return self._lerp("target", t)
 
     def target_velocity(self, t: float) -> np.ndarray:
         """dU/dt (n, 3) at time ``t``: constant between frames (the field is linear there)."""
-        self.target(t)
-        return self._tseg[4]
+        self._interval(t)
+        return self._velocity
 
     def jaw(self, t: float) -> np.ndarray:
         """Prescribed jaw-node displacements at time ``t``, linear between frames."""
-        w = self._interval(t)
-        ja, dj = self._seg[2], self._seg[3]
-        np.multiply(dj, w, out=self._jbuf)
-        self._jbuf += ja
-        return self._jbuf
+        return self._lerp("jaw", t)
 
 
 # --------------------------------------------------------------------------- the simulation
@@ -376,8 +372,7 @@ class PhysicsSettings:
     m_i (2π f)² (U_i(t) − u_i) toward its kinematic position (equilibrium
     unchanged, unstable modes held). ``lip_release`` (centre radius, corner
     radius, corner hold; m) is where it lets go across the lips
-    (:func:`release_weight`; None: only at the saliva's nodes);
-    ``release_floor`` (Hz) keeps a weaker spring there.
+    (:func:`release_weight`; None: only at the saliva's nodes).
     ``min_jacobian`` bounds the target's volume ratio (:meth:`FaceDrive.untangle`);
     ``field_smoothing`` averages the rig's surface field over quad neighbours.
     """
@@ -391,7 +386,6 @@ class PhysicsSettings:
     saliva: SalivaParams = field(default_factory=SalivaParams)
     tracking: float = TRACKING_HZ
     lip_release: tuple[float, float, float] | None = (RELEASE_CENTRE, RELEASE_CORNER, CORNER_HOLD)
-    release_floor: float = 0.0
     field_smoothing: int = 0
     min_jacobian: float = MIN_JACOBIAN
 
@@ -488,8 +482,7 @@ class StickySimulation:
                 w[seam] = 0.0
             else:
                 w = release_weight(fem, *settings.lip_release, seam_nodes=seam)
-            floor = (settings.release_floor / settings.tracking) ** 2
-            k[:, 1] *= floor + (1.0 - floor) * w
+            k[:, 1] *= w
             self.solver._track_k = k
         self.rest_gaps = fem.rest_gaps
 
