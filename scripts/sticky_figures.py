@@ -44,11 +44,7 @@ def emit(**kw):
 
 
 def ramp(rig, fps, start=0.02, ramp_s=0.12, hold=0.2, jaw=0.35, extra=None):
-    keys = [(0.0, 0.0), (start, 0.0), (start + ramp_s, 1.0), (start + ramp_s + hold, 1.0)]
-    t = np.arange(int(round(keys[-1][0] * fps)) + 1) / fps
-    v = drive.smoothstep_keyframes(t, keys)
-    cols = {"jaw": jaw * v, **{k: a * v for k, a in (extra or {}).items()}}
-    return drive.make_track(t, cols, rig.names, fps)
+    return drive.ramp_track(rig.names, fps, start, ramp_s, hold, jaw, extra)
 
 
 def run(fem, rig, track, physics="sticky", **settings):

@@ -300,11 +300,7 @@ def model():
 
 
 def _ramp(rig, fps, start=0.02, ramp=0.1, hold=0.15, jaw=0.35, extra=None):
-    keys = [(0.0, 0.0), (start, 0.0), (start + ramp, 1.0), (start + ramp + hold, 1.0)]
-    t = np.arange(int(round(keys[-1][0] * fps)) + 1) / fps
-    v = drive.smoothstep_keyframes(t, keys)
-    cols = {"jaw": jaw * v, **{k: a * v for k, a in (extra or {}).items()}}
-    return drive.make_track(t, cols, rig.names, fps)
+    return drive.ramp_track(rig.names, fps, start, ramp, hold, jaw, extra)
 
 
 def _run(model, track, physics="sticky", **settings):

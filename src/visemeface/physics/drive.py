@@ -96,6 +96,20 @@ def make_track(times, values: dict, names, fps: float) -> pd.DataFrame:
     return df
 
 
+def ramp_track(names, fps: float, start: float, ramp: float, hold: float, jaw: float = 0.35,
+               extra: dict | None = None) -> pd.DataFrame:
+    """A single jaw opening: rest until ``start``, eased up over ``ramp`` s, held ``hold`` s.
+
+    ``jaw`` is the jaw activation at the top, ``extra`` more columns ramped the
+    same way ({name: activation at the top}).
+    """
+    keys = [(0.0, 0.0), (start, 0.0), (start + ramp, 1.0), (start + ramp + hold, 1.0)]
+    t = np.arange(int(round(keys[-1][0] * fps)) + 1) / fps
+    v = smoothstep_keyframes(t, keys)
+    cols = {"jaw": jaw * v, **{k: a * v for k, a in (extra or {}).items()}}
+    return make_track(t, cols, names, fps)
+
+
 def scenario_track(name: str, names, fps: float = 60.0, jaw: float = 0.35, side: str = "both",
                    lip: float = 0.3) -> pd.DataFrame:
     """The activation track of a named scenario.
