@@ -32,7 +32,7 @@ def bench_fem_face(seconds: float, threads: int) -> None:
     from visemeface.muscles.rig import MuscleRig
     from visemeface.physics.drive import StickySimulation, scenario_track
     from visemeface.physics.face_model import build_fem_face
-    from visemeface.physics.tled import set_threads
+    from visemeface.runtime import set_threads
 
     set_threads(threads)
     face = default_face()
@@ -59,7 +59,7 @@ def bench_speak(threads: int) -> None:
     from visemeface.face.procedural import default_face
     from visemeface.muscles.rig import MuscleRig
     from visemeface.physics.drive import PhysicsSettings, simulate_track
-    from visemeface.physics.tled import set_threads
+    from visemeface.runtime import set_threads
     from visemeface.postures.library import load_visemes
     from visemeface.render.renderer import Renderer
     from visemeface.resources import transcripts_path
@@ -88,6 +88,9 @@ def bench_speak(threads: int) -> None:
 
 
 def main(argv=None):
+    from visemeface.runtime import configure
+
+    configure()  # as the CLI does: threading layer, OpenMP spin, cache folder
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--seconds", type=float, default=0.5, help="simulated seconds for fem_face (default 0.5)")
     ap.add_argument("--threads", default="1,2", help="numba thread counts to try (default 1,2)")

@@ -36,13 +36,16 @@ import json
 import os
 import time
 
-import numpy as np
+from visemeface.runtime import configure
 
-from visemeface.physics.hexmesh import box_mesh, extrude_quads
-from visemeface.physics.materials import SOFT_TISSUE
-from visemeface.physics.tled import TLEDSolver, set_threads  # first: sets numba's cache folder, GOMP_SPINCOUNT
+configure()  # the CLI's threading layer, OpenMP spin and cache folder, before numba compiles anything
 
+import numpy as np  # noqa: E402
 from numba import njit, prange  # noqa: E402
+
+from visemeface.physics.hexmesh import box_mesh, extrude_quads  # noqa: E402
+from visemeface.physics.materials import SOFT_TISSUE  # noqa: E402
+from visemeface.physics.tled import TLEDSolver, set_threads  # noqa: E402
 
 
 def seed_size_mesh():

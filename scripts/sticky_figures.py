@@ -242,6 +242,9 @@ def fig_speech(fem, rig):
 
 
 def main(argv=None):
+    from visemeface.runtime import configure
+
+    configure()  # as the CLI does: threading layer, OpenMP spin, cache folder
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--resolution", type=int, help="face vertices (default: the default face)")
     ap.add_argument("--calibration-resolution", type=int, default=1500,
@@ -253,7 +256,7 @@ def main(argv=None):
     ap.add_argument("--threads", type=int, default=None)
     args = ap.parse_args(argv)
     if args.threads:
-        from visemeface.physics.tled import set_threads
+        from visemeface.runtime import set_threads
         set_threads(args.threads)
     only = set(args.only.split(",")) if args.only else None
     face = default_face(resolution=args.resolution)

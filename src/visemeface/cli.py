@@ -16,7 +16,7 @@ import sys
 import warnings
 
 from visemeface import __version__, commands
-from visemeface.errors import VisemefaceError
+from visemeface.errors import EXIT, VisemefaceError, exit_status
 
 
 def _command_modules():
@@ -33,6 +33,8 @@ def build_parser() -> argparse.ArgumentParser:
         prog="visemeface",
         description="Expressive visual-speech synthesis: Waters muscle functions, visemes and emotions, "
         "coarticulated speech animation and a physically-based sticky-lip face.",
+        epilog="exit status: 0 done, 2 bad input (one line on stderr, nothing written), "
+        "3 a physical simulation diverged, 130 interrupted",
     )
     parser.add_argument("--version", action="version", version=f"visemeface {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -52,12 +54,15 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 0
     warnings.showwarning = _show_warning
+    from visemeface.runtime import configure
+
+    configure()
     previous = _terminate_like_interrupt()
     try:
         return int(args.func(args) or 0)
     except VisemefaceError as exc:
         print(f"visemeface: error: {exc}", file=sys.stderr)
-        return 2
+        return exit_status(exc)
     except BrokenPipeError:
         # Output piped into `head` and the like: stop quietly, as Unix tools do.
         import os
@@ -67,7 +72,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     except KeyboardInterrupt:
         print("visemeface: interrupted", file=sys.stderr)
-        return 130
+        return EXIT["interrupted"]
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)

@@ -1,8 +1,13 @@
-"""The project's own error types.
+"""The project's own error types and the command line's exit statuses.
 
 Every error a user can cause (bad file, bad value, existing output) is an
 :class:`InputError`; the CLI prints its message on one line and exits with
-status 2. Messages name the file, line and value that were wrong.
+status 2. Messages name the file, line and value that were wrong. A physical
+simulation that blows up is not bad input: :class:`SimulationDiverged` exits
+with status 3 and says where it happened and what to try.
+
+Exit statuses (:data:`EXIT`): 0 done, 2 bad input, 3 simulation diverged,
+130 interrupted (Ctrl-C or SIGTERM; nothing half written is left).
 """
 
 from __future__ import annotations
@@ -39,8 +44,33 @@ class InputError(VisemefaceError, ValueError):
         super().__init__(where + message)
 
 
+class SimulationDiverged(VisemefaceError, RuntimeError):
+    """A simulation produced a non-finite value or an inverted element (J <= 0). CLI exit status 3.
+
+    Attributes ``step``, ``time`` (s) and ``element`` say where; the message
+    says what to try (smaller time step, more damping, a gentler track).
+    """
+
+    def __init__(self, message: str, step: int, time: float, element: int):
+        super().__init__(message)
+        self.step, self.time, self.element = step, time, element
+
+
 class RenderUnavailable(VisemefaceError, RuntimeError):
     """No headless OpenGL (EGL) context could be made on this machine."""
+
+
+#: Exit statuses of the command line (README "Exit statuses").
+EXIT = {"done": 0, "input": 2, "diverged": 3, "interrupted": 130}
+
+
+def exit_status(exc: BaseException) -> int:
+    """The CLI exit status for an exception raised by a command."""
+    if isinstance(exc, SimulationDiverged):
+        return EXIT["diverged"]
+    if isinstance(exc, KeyboardInterrupt):
+        return EXIT["interrupted"]
+    return EXIT["input"]
 
 
 def close_matches(name: str, known: Iterable[str], n: int = 3) -> str:

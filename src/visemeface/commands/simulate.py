@@ -174,7 +174,7 @@ def run(args) -> int:
 
     video, csv, ckpt = _paths(args)
     if args.threads is not None:
-        from visemeface.physics.tled import set_threads
+        from visemeface.runtime import set_threads
         set_threads(args.threads)
     fem, rig, track, sim = build_simulation(args)          # every input check happens here
     motion, rows, start = [], [], None

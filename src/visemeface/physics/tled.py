@@ -53,57 +53,17 @@ and the solver refuses ``dt > min_e L_e / c_e`` with
 
 from __future__ import annotations
 
-import os
-import tempfile
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 
+import numba
 import numpy as np
+from numba import njit, prange
 
-from visemeface.errors import InputError
+from visemeface.errors import InputError, SimulationDiverged
 from visemeface.physics.hexmesh import NODE_SIGNS, HexMesh
 from visemeface.physics.materials import NeoHookean, material_table
-
-
-def _ensure_numba_cache_dir() -> None:
-    """Point NUMBA_CACHE_DIR at a writable folder when the package is read-only."""
-    if os.environ.get("NUMBA_CACHE_DIR"):
-        return
-    here = Path(__file__).resolve().parent
-    if os.access(here, os.W_OK):
-        return
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    for candidate in (os.path.join(base, "visemeface", "numba"),
-                      os.path.join(tempfile.gettempdir(), f"visemeface-numba-{os.getuid()}")):
-        try:
-            os.makedirs(candidate, exist_ok=True)
-        except OSError:
-            continue
-        if os.access(candidate, os.W_OK):
-            os.environ["NUMBA_CACHE_DIR"] = candidate
-            try:  # numba already imported elsewhere: update its live config too
-                import numba.core.config as _cfg
-                _cfg.CACHE_DIR = candidate
-            except Exception:  # pragma: no cover - numba always importable here
-                pass
-            return
-
-
-_ensure_numba_cache_dir()
-
-# GNU OpenMP (numba's "omp" threading layer) spins ~300,000 times at every
-# barrier by default. On a machine shared with other busy processes a spinning
-# or pre-empted worker then stalls each of the two parallel regions per step:
-# measured on a loaded 2-core box, 2 threads took 12 ms/step with the default and
-# 0.6–0.7 ms with a short spin (1,000) or OMP_WAIT_POLICY=passive. A short spin
-# still covers the barrier of an evenly split loop on an idle machine. Only a
-# default: a value the user set wins, and it matters only if set before libgomp
-# is first loaded.
-os.environ.setdefault("GOMP_SPINCOUNT", "1000")
-
-import numba  # noqa: E402  (after the cache folder is chosen)
-from numba import njit, prange  # noqa: E402
+from visemeface.runtime import set_threads  # noqa: F401  (re-exported: the solver's thread count)
 
 #: Hourglass base vectors Γ (8 × 4) for the node order of DESIGN §6: the
 #: columns are the products ξη, ηζ, ζξ, ξηζ of the nodes' local coordinates.
@@ -118,17 +78,6 @@ PARALLEL_MIN_ELEMENTS = 1000
 DEFAULT_HOURGLASS_KAPPA = 0.075
 
 _GAUSS = NODE_SIGNS / np.sqrt(3.0)
-
-
-class SimulationDiverged(InputError):
-    """A run produced a non-finite value or an inverted element (J ≤ 0).
-
-    Attributes ``step``, ``time`` and ``element`` say where.
-    """
-
-    def __init__(self, message: str, step: int, time: float, element: int):
-        super().__init__(message)
-        self.step, self.time, self.element = step, time, element
 
 
 # ---------------------------------------------------------------------------
@@ -862,13 +811,3 @@ class TLEDSolver:
                 yield Frame(step, t, u.copy(), float(0.5 * np.einsum("n,ni,ni->", self.mass, v, v)),
                             float(self._energy.sum()), v)
             u_prev, u, u_new = u, u_new, u_prev
-
-
-def set_threads(n: int | None) -> int:
-    """Set numba's thread count (None: all cores); returns the count in use."""
-    if n is not None:
-        most = numba.config.NUMBA_NUM_THREADS
-        if not 1 <= int(n) <= most:
-            raise InputError(f"--threads must be from 1 to {most} on this machine, got {n}")
-        numba.set_num_threads(int(n))
-    return numba.get_num_threads()

@@ -369,6 +369,7 @@ def test_speak_warns_when_audio_length_differs(short, capsys):
     assert info["audio_samples"] / info["audio_rate"] == pytest.approx(0.8, abs=2e-3)
 
 
+@pytest.mark.slow
 def test_say_text_to_video(short, capsys):
     from visemeface.speech.timeline import load_track
 
@@ -411,7 +412,7 @@ TINY = """0.00 0.05 _
 @pytest.fixture
 def coarse_rig(monkeypatch):
     from visemeface.muscles import rig as rig_mod
-    from visemeface.physics.tled import set_threads
+    from visemeface.runtime import set_threads
 
     set_threads(1)
     coarse = rig_mod.default_rig(resolution=1500)
@@ -419,6 +420,7 @@ def coarse_rig(monkeypatch):
     return coarse
 
 
+@pytest.mark.slow
 def test_speak_physics_frames_come_from_the_fem_face(short, capsys, coarse_rig):
     (short / "tiny.txt").write_text(TINY)
     code = main(["speak", "tiny.txt", "--size", "64", "--msaa", "0", "--physics", "elastic",

@@ -293,7 +293,7 @@ def model():
     from visemeface.face.procedural import default_face
     from visemeface.muscles.rig import MuscleRig
     from visemeface.physics.face_model import build_fem_face
-    from visemeface.physics.tled import set_threads
+    from visemeface.runtime import set_threads
     set_threads(1)          # shared 2-core CI: one thread avoids oversubscription
     face = default_face(resolution=1500)
     return build_fem_face(face), MuscleRig.from_file(face)
@@ -324,6 +324,7 @@ def _lips(fem):
     return np.unique(fem.seam_pairs.ravel())
 
 
+@pytest.mark.slow
 def test_same_equilibrium_with_and_without_glue_once_open_wide(model, opened):
     fem, rig = model
     lips = np.unique(np.concatenate([fem.face.region("upper_lip"), fem.face.region("lower_lip")]))
@@ -380,6 +381,7 @@ def full_model():
     return build_fem_face(face), MuscleRig.from_file(face)
 
 
+@pytest.mark.slow
 def test_central_glue_gives_two_openings_that_merge(full_model):
     fem, rig = full_model
     _, frames = _run(full_model, _ramp(rig, fps=200, ramp=0.25, hold=0.0, jaw=0.25), glue_profile="centre=0.18")
@@ -401,6 +403,7 @@ def seam_openings_open(fem, vertices):
     return seam_openings(fem, vertices)["open"]
 
 
+@pytest.mark.slow
 def test_one_sided_glue_opens_the_other_side_first(model):
     fem, rig = model
     _, frames = _run(model, _ramp(rig, fps=1000, hold=0.0), glue_profile="right=0.3,left=0")
@@ -410,6 +413,7 @@ def test_one_sided_glue_opens_the_other_side_first(model):
     assert op[fem.seam_s > 0].any() and not op[fem.seam_s < 0].any()
 
 
+@pytest.mark.slow
 def test_evaporation_makes_a_later_opening_unzip_sooner(model):
     fem, rig = model
     wet_early = _ramp(rig, fps=250, start=0.02, hold=0.0, ramp=0.08)
@@ -425,6 +429,7 @@ def test_evaporation_makes_a_later_opening_unzip_sooner(model):
     assert later < 0.8 * early
 
 
+@pytest.mark.slow
 def test_resume_from_a_checkpoint_continues_the_run(model):
     fem, rig = model
     track = _ramp(rig, fps=200, hold=0.0, ramp=0.05)
@@ -458,6 +463,7 @@ def test_bad_physics_input_is_refused_before_simulating(model):
         drive.StickySimulation(fem, rig, bad)
 
 
+@pytest.mark.slow
 def test_simulate_track_yields_renderable_frames_at_the_track_rate(model):
     fem, rig = model
     track = _ramp(rig, fps=50, hold=0.0, ramp=0.04)
@@ -468,6 +474,7 @@ def test_simulate_track_yields_renderable_frames_at_the_track_rate(model):
     assert np.allclose(fem.seam_gaps(frames[0]), 0.0, atol=1e-7)     # closed at rest
 
 
+@pytest.mark.slow
 def test_a_track_that_starts_mid_gesture_starts_in_that_posture(model):
     fem, rig = model
     t = np.arange(6) / 100.0
@@ -506,6 +513,7 @@ def test_untangle_lifts_crushed_target_elements_and_keeps_the_rest(model):
     np.testing.assert_array_equal(fixed[far], bad[far])       # a local repair
 
 
+@pytest.mark.slow
 def test_tracking_spring_keeps_the_equilibrium_and_releases_the_lips_across_the_seam(model):
     # The spring m (2 pi f)^2 (U - u) vanishes at the kinematic posture: a held opening
     # settles at the same place whatever its stiffness. Across the lips (y) it lets go

@@ -11,10 +11,11 @@ nbformat = pytest.importorskip("nbformat")
 nbclient = pytest.importorskip("nbclient")
 pytest.importorskip("ipykernel")
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 NOTEBOOK = ROOT / "notebooks" / "blend_emotion_viseme.ipynb"
 
 
+@pytest.mark.slow
 def test_blend_notebook_executes(tmp_path, monkeypatch):
     import visemeface
 

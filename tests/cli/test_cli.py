@@ -21,6 +21,7 @@ def test_help_lists_commands(capsys):
     assert "usage: visemeface" in out
 
 
+@pytest.mark.slow
 def test_console_entry_point_runs():
     proc = subprocess.run([sys.executable, "-m", "visemeface", "--version"], capture_output=True, text=True)
     assert proc.returncode == 0 and __version__ in proc.stdout

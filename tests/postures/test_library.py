@@ -246,7 +246,7 @@ def test_viseme_table_is_up_to_date_with_targets_and_rig(rig, visemes):
     from visemeface.muscles.measure import LipGauge
 
     spec = importlib.util.spec_from_file_location(
-        "fit_visemes", Path(__file__).resolve().parent.parent / "scripts" / "fit_visemes.py")
+        "fit_visemes", Path(__file__).resolve().parents[2] / "scripts" / "fit_visemes.py")
     fv = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(fv)
     rows, report = fv.fit_table(rig)

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-SCRIPT = Path(__file__).resolve().parent.parent / "scripts" / "viseme_class_test.py"
+SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "viseme_class_test.py"
 
 
 @pytest.fixture(scope="module")

@@ -366,23 +366,6 @@ def test_forces_on_all_nodes_and_on_overlapping_sets_add_up():
         TLEDSolver(m, SOFT_TISSUE, dt=1e-4, forces=[([1, 1], lambda t: [0.0, 0.0, 1.0])])
 
 
-def test_numba_cache_folder_falls_back_when_the_package_is_read_only(monkeypatch, tmp_path):
-    import os
-
-    from visemeface.physics import tled
-
-    monkeypatch.setenv("NUMBA_CACHE_DIR", "")  # recorded, so restored afterwards; empty = unset
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
-    real_access = os.access
-    package = os.path.dirname(os.path.abspath(tled.__file__))
-    monkeypatch.setattr(os, "access", lambda p, mode: False if os.path.abspath(p) == package else real_access(p, mode))
-    import numba.core.config as cfg
-    monkeypatch.setattr(cfg, "CACHE_DIR", cfg.CACHE_DIR)
-    tled._ensure_numba_cache_dir()
-    assert os.environ["NUMBA_CACHE_DIR"] == str(tmp_path / "visemeface" / "numba")
-    assert (tmp_path / "visemeface" / "numba").is_dir() and cfg.CACHE_DIR == os.environ["NUMBA_CACHE_DIR"]
-
-
 def test_a_run_restarted_from_a_frame_continues_the_motion():
     """Displacement + velocity of a frame restart the run: the restarted path follows the
     uninterrupted one to second order in dt (the Taylor start)."""

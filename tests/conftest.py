@@ -1,0 +1,68 @@
+"""Shared fixtures and markers.
+
+Session fixtures build the expensive objects once for the whole run (the default
+face, its rig, the FEM face). They are shared: a test must not modify them
+(copy first). Tests marked ``slow`` (FEM simulations, end-to-end renders of whole
+utterances, real-video runs) are skipped by the fast loop ``pytest -m "not slow"``;
+CI runs everything.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+#: The repository root (tests/ lies directly under it).
+ROOT = Path(__file__).resolve().parents[1]
+#: Real GRID clips shared beside the repository (``../shared/realdata``; see its README).
+REALDATA = Path(os.environ.get("VISEMEFACE_REALDATA", ROOT.parent / "shared" / "realdata"))
+
+
+def pytest_configure(config):
+    from visemeface.runtime import configure
+
+    configure()  # as the CLI does: numba's threading layer, OpenMP spin, cache folder
+    config.addinivalue_line("markers", "slow: FEM simulations, whole-utterance renders and real-video runs "
+                            "(deselect with -m 'not slow')")
+    config.addinivalue_line("markers", "realdata: needs ../shared/realdata (skipped where absent)")
+
+
+def pytest_collection_modifyitems(config, items):
+    if REALDATA.is_dir():
+        return
+    skip = pytest.mark.skip(reason=f"real GRID clips not found at {REALDATA} (set VISEMEFACE_REALDATA)")
+    for item in items:
+        if "realdata" in item.keywords:
+            item.add_marker(skip)
+
+
+@pytest.fixture(scope="session")
+def realdata() -> Path:
+    """The folder of real GRID clips (tests using it are marked ``realdata``)."""
+    return REALDATA
+
+
+@pytest.fixture(scope="session")
+def default_face():
+    """The embedded default face (shared; do not modify)."""
+    from visemeface.face.procedural import default_face as make
+
+    return make()
+
+
+@pytest.fixture(scope="session")
+def rig(default_face):
+    """The default rig on the default face (shared; do not modify)."""
+    from visemeface.muscles.rig import MuscleRig
+
+    return MuscleRig.from_file(default_face)
+
+
+@pytest.fixture(scope="session")
+def fem_face(default_face):
+    """The FEM model of the default face (shared; do not modify)."""
+    from visemeface.physics.face_model import build_fem_face
+
+    return build_fem_face(default_face)

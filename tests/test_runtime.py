@@ -1,0 +1,68 @@
+"""Process settings: made by one explicit call, never by importing a module."""
+
+import json
+import os
+import subprocess
+import sys
+
+from visemeface import runtime
+
+
+def test_importing_every_module_changes_no_environment_variable():
+    # Third-party libraries may set variables of their own at import (OpenCV sets
+    # LD_LIBRARY_PATH): import them first, then measure what visemeface's modules change.
+    code = (
+        "import os, json, pkgutil, importlib, visemeface\n"
+        "for lib in ('cv2', 'numba', 'numpy', 'scipy', 'pandas', 'matplotlib', 'moderngl', 'trimesh'):\n"
+        "    importlib.import_module(lib)\n"
+        "before = dict(os.environ)\n"
+        "for m in pkgutil.walk_packages(visemeface.__path__, 'visemeface.'):\n"
+        "    if not m.name.endswith('__main__'):\n"
+        "        importlib.import_module(m.name)\n"
+        "after = dict(os.environ)\n"
+        "print(json.dumps(sorted(k for k in set(before) | set(after) if before.get(k) != after.get(k))))\n")
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "GOMP_"))}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
+    assert json.loads(out.stdout.strip().splitlines()[-1]) == []
+
+
+def test_configure_pins_a_fork_safe_threading_layer_and_a_short_spin():
+    env = {}
+    got = runtime.configure(environ=env)
+    assert env["NUMBA_THREADING_LAYER"] in runtime.THREADING_LAYERS
+    assert env["GOMP_SPINCOUNT"] == runtime.GOMP_SPINCOUNT
+    assert got["threading_layer"] == env["NUMBA_THREADING_LAYER"]
+
+
+def test_configure_keeps_what_the_user_set():
+    env = {"NUMBA_THREADING_LAYER": "workqueue", "GOMP_SPINCOUNT": "5", "NUMBA_CACHE_DIR": "/somewhere"}
+    runtime.configure(environ=env)
+    assert env == {"NUMBA_THREADING_LAYER": "workqueue", "GOMP_SPINCOUNT": "5", "NUMBA_CACHE_DIR": "/somewhere"}
+
+
+def test_cache_folder_falls_back_to_temp_when_package_and_home_are_read_only(monkeypatch, tmp_path):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    monkeypatch.setattr(runtime.tempfile, "gettempdir", lambda: str(tmp_path))
+    monkeypatch.setattr(runtime.os, "access", lambda p, mode: str(p).startswith(str(tmp_path / "visemeface-numba")))
+    env = {}
+    runtime.configure(environ=env)
+    assert env["NUMBA_CACHE_DIR"] == str(tmp_path / f"visemeface-numba-{os.getuid()}")
+    assert (tmp_path / f"visemeface-numba-{os.getuid()}").is_dir()
+
+
+def test_the_cli_runs_its_kernels_on_the_pinned_layer(tmp_path):
+    code = ("import sys\n"
+            "from visemeface.runtime import configure\n"
+            "configure()\n"
+            "import numpy as np, numba\n"
+            "from visemeface.physics.hexmesh import box_mesh\n"
+            "from visemeface.physics.materials import SOFT_TISSUE\n"
+            "from visemeface.physics.tled import TLEDSolver\n"
+            "m = box_mesh((12, 10, 10), (0.012, 0.01, 0.01))\n"
+            "s = TLEDSolver(m, SOFT_TISSUE, dt=1e-5, fixed=m.node_sets['xmin'], parallel=True)\n"
+            "list(s.run(20, output_every=20))\n"
+            "print(numba.threading_layer())\n")
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "GOMP_"))}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True,
+                         timeout=120)
+    assert out.stdout.strip().splitlines()[-1] in runtime.THREADING_LAYERS
