@@ -336,3 +336,14 @@ def test_one_track_conversion_for_every_consumer():
         rig.track_matrix(track.assign(zygomatic_mayor_left=0.1))
     with pytest.raises(InputError, match="'jaw' at t=0.0333"):
         rig.track_matrix(track.assign(jaw=[0.0, np.nan, 0.0]))
+
+
+def test_the_shared_default_rig_cannot_be_changed_by_one_caller():
+    from visemeface.muscles.rig import default_rig
+
+    shared = default_rig()
+    with pytest.raises(ValueError):
+        shared.rest[0, 0] = 1.0
+    with pytest.raises(ValueError):
+        shared.face.vertices[0, 0] = 1.0
+    assert default_rig() is shared

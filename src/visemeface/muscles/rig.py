@@ -499,17 +499,7 @@ class MuscleRig:
             if not np.isfinite(v):
                 raise InputError(f"activation of {name!r} is {v} (must be finite)")
             a[self.index[name]] = v
-        return self._clamp(a)
-
-    def _clamp(self, a: np.ndarray) -> np.ndarray:
-        lo, hi = self.ranges[:, 0], self.ranges[:, 1]
-        bad = (a < lo) | (a > hi)
-        if bad.any():
-            what = ", ".join(f"{self.names[i]}={a[i]:g} -> {np.clip(a[i], lo[i], hi[i]):g}"
-                             for i in np.flatnonzero(bad))
-            warnings.warn(f"activations clamped to the muscles' ranges: {what}", stacklevel=3)
-            a = np.clip(a, lo, hi)
-        return a
+        return self.clamp(a)
 
     def _vector(self, a) -> np.ndarray:
         if isinstance(a, Mapping) or hasattr(a, "items"):
@@ -520,7 +510,7 @@ class MuscleRig:
         if not np.all(np.isfinite(a)):
             i = int(np.flatnonzero(~np.isfinite(a))[0])
             raise InputError(f"activation of {self.names[i]!r} is {a[i]} (must be finite)")
-        return self._clamp(a)
+        return self.clamp(a)
 
     # ---------------------------------------------------------------- poses
     def jaw_displacement(self, jaw: float) -> np.ndarray:
@@ -563,14 +553,25 @@ class MuscleRig:
         return A
 
     def clamp(self, A: np.ndarray) -> np.ndarray:
-        """``A`` (F, M+1) clamped to the muscles' ranges, with one warning naming those clamped."""
+        """Activations ``A`` ((M+1,) or (F, M+1)) clamped to the functions' ranges.
+
+        The one clamp of the project: one warning names each function clamped with
+        its most extreme value, e.g. ``jaw=1.7 -> 1`` (for a track, the frame count too).
+        """
+        A = np.asarray(A, dtype=float)
         lo, hi = self.ranges[:, 0], self.ranges[:, 1]
-        bad = np.any((A < lo) | (A > hi), axis=0)
+        out = np.clip(A, lo, hi)
+        bad = np.atleast_2d(out != A)
         if bad.any():
-            warnings.warn("activations clamped to the muscles' ranges: "
-                          + ", ".join(self.names[i] for i in np.flatnonzero(bad)), stacklevel=3)
-            A = np.clip(A, lo, hi)
-        return A
+            rows = np.atleast_2d(A)
+            parts = []
+            for i in np.flatnonzero(bad.any(axis=0)):
+                col = rows[bad[:, i], i]
+                worst = col[np.argmax(np.abs(col - np.clip(col, lo[i], hi[i])))]
+                frames = f" in {int(bad[:, i].sum())} frames" if A.ndim == 2 else ""
+                parts.append(f"{self.names[i]}={worst:.4g} -> {np.clip(worst, lo[i], hi[i]):.4g}{frames}")
+            warnings.warn("activations clamped to the muscles' ranges: " + ", ".join(parts), stacklevel=3)
+        return out
 
     def poses(self, activations) -> np.ndarray:
         """Posed vertices (F, N, 3) float32 for activations (F, M+1) (or a DataFrame with rig columns)."""
@@ -595,13 +596,30 @@ class MuscleRig:
         return pd.DataFrame(rows, columns=["name", "kind", "side", "min", "max", "lip"]).set_index("name")
 
 
+def _freeze(obj) -> None:
+    """Make every numpy array held by ``obj`` (and its dict/list members) read-only."""
+    for value in vars(obj).values():
+        items = value.values() if isinstance(value, dict) else value if isinstance(value, (list, tuple)) else [value]
+        for v in items:
+            if isinstance(v, np.ndarray):
+                v.flags.writeable = False
+
+
 @functools.lru_cache(maxsize=4)
 def _default_rig(resolution):
     from visemeface.face.procedural import default_face
     face = default_face() if resolution is None else default_face(resolution=resolution)
-    return MuscleRig.from_file(face)
+    rig = MuscleRig.from_file(face)
+    # Shared by every caller: its arrays are read-only, so no caller can change the others' rig.
+    _freeze(face)
+    _freeze(rig)
+    return rig
 
 
 def default_rig(resolution: int | None = None) -> MuscleRig:
-    """The default rig file placed on the default face (cached; do not modify it)."""
+    """The default rig file placed on the default face.
+
+    Built once per resolution and shared; its arrays are read-only (a write raises
+    ``ValueError``). Build your own with ``MuscleRig.from_file(default_face())`` to modify one.
+    """
     return _default_rig(resolution)
