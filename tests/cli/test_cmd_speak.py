@@ -472,7 +472,7 @@ def test_speak_physics_bad_input_exits_2_before_simulating(short, capsys, coarse
 
 
 def test_absurd_transcript_length_and_msaa_are_refused_before_work(short, capsys):
-    (short / "huge.txt").write_text("0.0 0.2 _\n0.2 1e9 aa\n")
+    (short / "huge.txt").write_text("0.0 20000 _\n20000 20000.2 aa\n")   # plausible phones, 5.6 h
     assert main(["speak", "huge.txt", "--size", "32", "-q"]) == 2
     assert "limit" in capsys.readouterr().err
     assert main(["speak", "short.txt", "--size", "32", "--msaa", "3", "-q"]) == 2

@@ -11,8 +11,7 @@ from hypothesis import strategies as st
 
 from visemeface.errors import InputError
 from visemeface.postures.phonemes import DECTALK
-from visemeface.speech.g2p import durations, emotion_keys, number_to_words, speech_span, text_to_segments, timing
-from visemeface.speech.g2p import words as g2p_words
+from visemeface.speech.g2p import durations, number_to_words, speech_span, text_to_segments, text_to_utterance, timing
 
 
 def phones(seg):
@@ -100,19 +99,18 @@ def test_punctuation_pauses():
 
 
 def test_emotion_tags_become_a_key_track():
-    seg = text_to_segments("[anger 0.8] I told you [neutral] fine [happiness=0.5] thanks [fear]")
-    keys = emotion_keys(seg)
+    utt = text_to_utterance("[anger 0.8] I told you [neutral] fine [happiness=0.5] thanks [fear]")
+    keys = utt.emotion_keys
     assert list(keys.emotion) == ["anger", "neutral", "happiness", "fear"]
     assert list(keys.weight) == [0.8, 1.0, 0.5, 1.0]
-    words = g2p_words(seg)
+    words = utt.words
     assert keys.time.iloc[0] == 0.0
     assert keys.time.iloc[1] == pytest.approx(words.start[words.word == "fine"].iloc[0])
     assert keys.time.iloc[2] == pytest.approx(words.start[words.word == "thanks"].iloc[0])
     assert keys.time.iloc[3] == pytest.approx(words.end.iloc[-1])     # a final tag: at the end of speech
-    assert emotion_keys(text_to_segments("plain")).empty
-    # Plain tuples in attrs: segments still concatenate and compare.
-    both = pd.concat([seg, seg], ignore_index=True)
-    assert len(both) == 2 * len(seg) and both.attrs["emotion_keys"] == seg.attrs["emotion_keys"]
+    assert text_to_utterance("plain").emotion_keys.empty
+    # Nothing rides on the Segments' attrs: they concatenate and compare as plain tables.
+    assert text_to_segments("[anger] plain").attrs == {}
 
 
 @pytest.mark.parametrize("text,match", [

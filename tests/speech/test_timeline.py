@@ -213,10 +213,12 @@ def test_emotion_key_track_ramps_smoothly():
     assert anger.loc[0.5] == pytest.approx(0.2, abs=1e-9)  # half way at the key time
 
 
-def test_emotion_keys_in_segment_attrs_are_used():
-    seg = segs(["aa"] * 6, 0.1)
-    seg.attrs["emotion_keys"] = ((0.0, "surprise", 1.0),)          # as speech.g2p stores it
-    track = activation_track(seg, toy_visemes(), fps=50, expressions=expressions())
+def test_emotion_keys_of_an_utterance_are_used():
+    from visemeface.speech.utterance import Utterance
+
+    keys = pd.DataFrame({"time": [0.0], "emotion": ["surprise"], "weight": [1.0]})
+    utt = Utterance(segs(["aa"] * 6, 0.1), emotion_keys=keys)
+    track = activation_track(utt, toy_visemes(), fps=50, expressions=expressions())
     plain = activation_track(segs(["aa"] * 6, 0.1), toy_visemes(), fps=50)
     assert np.allclose(track["jaw"].loc[0.3:0.8], np.clip(plain["jaw"].loc[0.3:0.8] + 0.3, 0, 1))
 

@@ -12,8 +12,7 @@ from praatio import textgrid
 from visemeface.errors import InputError
 from visemeface.postures.phonemes import DECTALK
 from visemeface.resources import transcripts_path
-from visemeface.speech.g2p import emotion_keys
-from visemeface.speech.transcripts import FORMATS, detect_format, read_transcript
+from visemeface.speech.transcripts import FORMATS, detect_format, read_transcript, read_utterance
 
 SENTENCE = "_ b aa b m uw v z f ay v b ow t s _".split()
 
@@ -50,8 +49,9 @@ EXAMPLES = {
 
 @pytest.mark.parametrize("name,fmt", EXAMPLES.items())
 def test_every_example_reads_to_the_same_sentence(name, fmt):
-    seg = read_transcript(transcripts_path(name))
-    assert seg.attrs["format"] == fmt
+    utt = read_utterance(transcripts_path(name))
+    assert utt.source_format == fmt
+    seg = utt.segments
     assert_valid(seg)
     phones = list(seg.phoneme)
     expected = SENTENCE if fmt != "mfa-csv" else SENTENCE[:-1]     # MFA CSV leaves final silence out
@@ -71,10 +71,11 @@ def test_seed_example_one_five_zero_zero_six():
 
 
 def test_text_example_with_emotion_tags():
-    seg = read_transcript(transcripts_path("bob_moves_five_boats_angry.txt"))
-    assert seg.attrs["format"] == "text"
+    utt = read_utterance(transcripts_path("bob_moves_five_boats_angry.txt"))
+    assert utt.source_format == "text"
+    seg = utt.segments
     assert_valid(seg)
-    keys = emotion_keys(seg)
+    keys = utt.emotion_keys
     assert list(keys.emotion) == ["anger", "happiness"] and list(keys.weight) == [0.8, 0.6]
     assert keys.time.iloc[0] == 0.0 and keys.time.iloc[1] > 1.0
 
@@ -166,8 +167,9 @@ def test_hts_full_context_labels(tmp_path):
 def test_xwaves_lab_of_cmu_arctic(tmp_path):
     lab = ("separator ;\nnfields 1\n#\n    0.16500 125 pau\n    0.24000 125 ao\n    0.31500 125 th\n"
            "    0.40500 125 er\n")
-    seg = read_transcript(write(tmp_path, "arctic_a0001.lab", lab))
-    assert seg.attrs["format"] == "lab"
+    utt = read_utterance(write(tmp_path, "arctic_a0001.lab", lab))
+    assert utt.source_format == "lab"
+    seg = utt.segments
     assert list(seg.phoneme) == ["_", "ao", "th", "rr"]
     assert seg.end.tolist() == pytest.approx([0.165, 0.24, 0.315, 0.405])
 
@@ -376,8 +378,9 @@ def test_dectalk_errors(tmp_path):
 # ----------------------------------------------------------------------------- plain text, misc
 
 def test_plain_text_goes_through_g2p(tmp_path):
-    seg = read_transcript(write(tmp_path, "s.txt", "Bob moves five boats.\n"))
-    assert seg.attrs["format"] == "text"
+    utt = read_utterance(write(tmp_path, "s.txt", "Bob moves five boats.\n"))
+    assert utt.source_format == "text"
+    seg = utt.segments
     assert [p for p in seg.phoneme] == SENTENCE
 
 
@@ -515,3 +518,43 @@ def test_property_any_text_with_detection(tmp_path, content):
 def test_formats_list_matches_cli():
     from visemeface.commands.speak import FORMATS as CLI_FORMATS
     assert set(CLI_FORMATS) - {"auto"} == set(FORMATS)
+
+
+# ----------------------------------------------------------------------------- wrong input that used to pass
+
+def test_a_transcript_of_comments_only_is_empty_not_english(tmp_path):
+    with pytest.raises(InputError, match="transcript is empty \\(only comments\\)"):
+        read_transcript(write(tmp_path, "c.txt", "# nothing here\n; nor here\n"))
+
+
+def test_a_speaking_rate_for_a_timed_transcript_is_refused(tmp_path):
+    with pytest.raises(InputError, match="--rate applies to plain text only"):
+        read_transcript(transcripts_path("bob_moves_five_boats.lab"), rate_wpm=120)
+
+
+def test_a_lab_file_read_as_timit_samples_is_refused_not_stretched_to_minutes():
+    with pytest.raises(InputError, match="wrong time units"):
+        read_transcript(transcripts_path("bob_moves_five_boats.lab"), fmt="phn")
+
+
+def test_textgrid_with_an_absurd_interval_count_is_a_one_line_error(tmp_path):
+    # Short format; praatio reads it (it ignores the count), the line finder must not overflow.
+    text = ('File type = "ooTextFile"\nObject class = "TextGrid"\n\n0\n1\n<exists>\n1\n"IntervalTier"\n'
+            '"phones"\n0\n1\n1e309\n0\n1\n"aa"\n')
+    seg = read_transcript(write(tmp_path, "big.TextGrid", text))
+    assert list(seg.phoneme) == ["aa"]
+
+
+def test_a_text_file_forced_to_textgrid_says_so_without_python_internals(tmp_path):
+    with pytest.raises(InputError, match="not a readable TextGrid") as err:
+        read_transcript(write(tmp_path, "t.txt", "hello there\n"), fmt="textgrid")
+    assert "IndexError" not in str(err.value)
+
+
+def test_dectalk_pauses_are_the_text_front_ends_pauses(tmp_path):
+    from visemeface.speech.g2p import timing
+
+    seg = read_transcript(write(tmp_path, "d.txt", "[aa<100> , aa<100> . aa<100>]"))
+    t = timing()
+    pauses = (seg.end - seg.start)[seg.phoneme == "_"].to_numpy()
+    assert pauses == pytest.approx([t["pause_comma_ms"] / 1000, t["pause_sentence_ms"] / 1000])

@@ -27,11 +27,10 @@ Emotion tags
 ``[anger 0.8] I told you [neutral] fine`` -- a tag ``[name weight]``,
 ``[name=weight]`` or ``[name]`` (weight 1) sets that emotion's weight from the
 next word on; ``[neutral]`` sets every emotion to 0. The tags are returned as an
-*emotion key track*: ``segments.attrs["emotion_keys"]`` holds a tuple of
-``(time_s, emotion, weight)`` tuples in time order, and :func:`emotion_keys`
-returns it as a DataFrame with columns ``time`` (s), ``emotion`` (str),
-``weight`` (float) (``emotion == "neutral"`` means all emotions to 0). The
-timeline ramps between keys smoothly.
+*emotion key track*, the ``emotion_keys`` of the :class:`~visemeface.speech.utterance.Utterance`
+that :func:`text_to_utterance` returns: a DataFrame with columns ``time`` (s),
+``emotion`` (str), ``weight`` (float) in time order (``emotion == "neutral"``
+means all emotions to 0). The timeline ramps between keys smoothly.
 
 Examples
 --------
@@ -56,8 +55,8 @@ from visemeface.errors import InputError
 from visemeface.postures.phonemes import DECTALK, SILENCE, is_vowel, to_dectalk
 from visemeface.resources import data_path
 
-__all__ = ["DEFAULT_RATE_WPM", "durations", "emotion_keys", "words", "inherent_duration", "number_to_words",
-           "speech_span", "text_to_segments", "timing", "word_to_arpabet"]
+__all__ = ["DEFAULT_RATE_WPM", "durations", "inherent_duration", "number_to_words", "punctuation_pause",
+           "speech_span", "text_to_segments", "text_to_utterance", "timing", "word_to_arpabet"]
 
 
 def _read(name: str) -> list[dict[str, str]]:
@@ -366,9 +365,120 @@ def speech_span(audio, threshold_db: float = -35.0, frame: float = 0.02,
     return float(t0), float(t1), float(duration)
 
 
-def text_to_segments(text: str, rate_wpm: float | None = None, audio=None, *, path=None,
-                     warn: bool = True) -> pd.DataFrame:
-    """Timed DECtalk phonemes for English text.
+#: Punctuation marks of DECtalk strings and the phrase breaks they make (``timing.csv``'s pauses).
+_PAUSE_KIND = {",": "comma", ";": "clause", ":": "clause", ".": "sentence", "!": "sentence", "?": "sentence"}
+
+
+def pause_seconds(kind: str) -> float:
+    """Length (s) of a ``comma``, ``clause`` or ``sentence`` pause (``data/phonemes/timing.csv``)."""
+    return timing()[f"pause_{kind}_ms"] / 1000
+
+
+def punctuation_pause(mark: str) -> float | None:
+    """Pause (s) a punctuation mark inserts (``,`` ``;`` ``:`` ``.`` ``!`` ``?``), None for anything else."""
+    kind = _PAUSE_KIND.get(mark)
+    return None if kind is None else pause_seconds(kind)
+
+
+def _phrase_items(text: str, path, warn: bool) -> list[tuple]:
+    """Words with their DECtalk phones, pauses (s) and emotion tags, in order.
+
+    ``("word", word, [(sym, stress)])`` | ``("pause", seconds)`` | ``("emotion", (name, weight))``;
+    a pause before the first word is dropped, adjacent pauses merge into the longest.
+    """
+    items: list[tuple] = []
+    for kind, value, line in _tokens(text, path):
+        if kind == "word":
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                phones = _word_to_dectalk(word_to_arpabet(value, warn=warn))
+            for w in caught:
+                msg = f"{path}:{line}: {w.message}" if path is not None else str(w.message)
+                warnings.warn(msg, UserWarning, stacklevel=3)
+            if phones:
+                items.append(("word", value, phones))
+        elif kind == "pause":
+            seconds = pause_seconds(value)
+            if items and items[-1][0] == "pause":
+                items[-1] = ("pause", max(items[-1][1], seconds))
+            elif items and any(it[0] == "word" for it in items):
+                items.append(("pause", seconds))
+        else:
+            items.append(("emotion", value))
+    return items
+
+
+def _phone_percent(stress, in_final: bool, t: dict) -> float:
+    """The Klatt factor product of one phone (module docstring)."""
+    if stress is None:
+        pct = 1.0 if in_final else t["consonant"]
+    else:
+        pct = {1: t["primary_stress"], 2: t["secondary_stress"]}.get(stress, t["unstressed"])
+        if not in_final:
+            pct *= t["nonfinal_vowel"]
+    return pct * (t["phrase_final"] if in_final else 1.0)
+
+
+def _klatt_durations(items: list[tuple], t: dict):
+    """Phones ``[symbol, duration, word index]``, words, emotion tags and pauses by phone index."""
+    table = durations()
+    phones: list[list] = []
+    words: list[str] = []
+    emotion_at: list[tuple[int, str, float]] = []   # (phone index, name, weight)
+    pauses: dict[int, float] = {}                   # phone index it precedes -> seconds
+    for idx, it in enumerate(items):
+        if it[0] == "emotion":
+            emotion_at.append((len(phones), *it[1]))
+            continue
+        if it[0] == "pause":
+            pauses[len(phones)] = max(pauses.get(len(phones), 0.0), it[1])
+            continue
+        wphones = it[2]
+        # Phrase-final: the word is followed by a pause or is the last word.
+        nxt = next((items[j] for j in range(idx + 1, len(items)) if items[j][0] != "emotion"), None)
+        final = nxt is None or nxt[0] == "pause"
+        vowel_idx = [k for k, (_, st) in enumerate(wphones) if st is not None]
+        last_syll = vowel_idx[-1] if vowel_idx else 0
+        for k, (sym, stress) in enumerate(wphones):
+            lo, hi = table.at[sym, "minimum"], table.at[sym, "inherent"]
+            phones.append([sym, lo + (hi - lo) * _phone_percent(stress, final and k >= last_syll, t), len(words)])
+        words.append(it[1])
+    pauses = {k: s for k, s in pauses.items() if k < len(phones)}   # after the last word: the tail silence
+    return phones, words, emotion_at, pauses
+
+
+def _lay_out(phones, pauses, scale: float, lead: float):
+    """Phone and pause intervals end to end from ``lead``: starts, ends, symbols, word of each, phone starts."""
+    starts, ends, syms, word_of, phone_start = [], [], [], [], []
+    now = lead
+    for k, (sym, dur, w) in enumerate(phones):
+        if k in pauses:
+            starts.append(now)
+            now += pauses[k]
+            ends.append(now)
+            syms.append(SILENCE)
+            word_of.append(-1)
+        phone_start.append(now)
+        starts.append(now)
+        now += dur * scale
+        ends.append(now)
+        syms.append(sym)
+        word_of.append(w)
+    return starts, ends, syms, word_of, phone_start
+
+
+def _audio_map(audio, speech_t0: float, speech_t1: float, end_time: float):
+    """The map from model time to audio time (identity without audio) and the utterance's end."""
+    if audio is None:
+        return (lambda x: np.asarray(x, dtype=float)), end_time
+    a0, a1, total = speech_span(audio)
+    stretch = (a1 - a0) / (speech_t1 - speech_t0)
+    return (lambda x: a0 + (np.asarray(x, dtype=float) - speech_t0) * stretch), max(total, a1)
+
+
+def text_to_utterance(text: str, rate_wpm: float | None = None, audio=None, *, path=None,
+                      warn: bool = True):
+    """Timed DECtalk phonemes, words and emotion keys for English text.
 
     Parameters
     ----------
@@ -388,126 +498,36 @@ def text_to_segments(text: str, rate_wpm: float | None = None, audio=None, *, pa
 
     Returns
     -------
-    Segments
-        DataFrame ``start``, ``end``, ``phoneme``, starting and ending with
-        silence. ``attrs["emotion_keys"]``: the emotion key track, a tuple of
-        ``(time, emotion, weight)`` (as a DataFrame: :func:`emotion_keys`);
-        ``attrs["words"]``: a tuple of ``(start, end, word)`` (:func:`words`).
+    Utterance
+        Segments starting and ending with silence, the word timing and the emotion keys.
 
     Raises
     ------
     InputError
         No words, a bad tag, a bad rate, unreadable audio.
     """
+    from visemeface.speech.utterance import Utterance
+
     t = timing()
     if rate_wpm is None:
         rate_wpm = t["default_rate_wpm"]
     if not (isinstance(rate_wpm, (int, float)) and math.isfinite(rate_wpm) and 20 <= rate_wpm <= 1000):
         raise InputError(f"speaking rate {rate_wpm!r} words/min is not in 20..1000", path)
     text = str(text).lstrip("\ufeff")
-
-    # Phrase structure: words (with their DECtalk phones) and pauses.
-    items: list[tuple] = []        # ("word", word, [(sym, stress)]) | ("pause", seconds) | ("emotion", ...)
-    pause_s = {"comma": t["pause_comma_ms"], "clause": t["pause_clause_ms"],
-               "sentence": t["pause_sentence_ms"]}
-    for kind, value, line in _tokens(text, path):
-        if kind == "word":
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always")
-                phones = _word_to_dectalk(word_to_arpabet(value, warn=warn))
-            for w in caught:
-                msg = f"{path}:{line}: {w.message}" if path is not None else str(w.message)
-                warnings.warn(msg, UserWarning, stacklevel=2)
-            if phones:
-                items.append(("word", value, phones))
-        elif kind == "pause":
-            seconds = pause_s[value] / 1000
-            if items and items[-1][0] == "pause":
-                items[-1] = ("pause", max(items[-1][1], seconds))
-            elif items and any(it[0] == "word" for it in items):
-                items.append(("pause", seconds))
-        else:
-            items.append(("emotion", value))
+    items = _phrase_items(text, path, warn)
     n_words = sum(1 for it in items if it[0] == "word")
     if n_words == 0:
         raise InputError("no words to speak in the text", path,
                          _line_of(text, len(text)) if path is not None else None)
-
-    # Durations: simplified Klatt model.
-    table = durations()
-    phones: list[list] = []        # [symbol, duration, word_index]
-    words: list[str] = []
-    emotion_at: list[tuple[int, str, float]] = []   # (phone index, name, weight)
-    pauses: list[tuple[int, float]] = []            # (phone index it precedes, seconds)
-    for idx, it in enumerate(items):
-        if it[0] == "emotion":
-            emotion_at.append((len(phones), *it[1]))
-            continue
-        if it[0] == "pause":
-            pauses.append((len(phones), it[1]))
-            continue
-        wphones = it[2]
-        # Phrase-final: the word is followed by a pause or is the last word.
-        nxt = next((items[j] for j in range(idx + 1, len(items)) if items[j][0] != "emotion"), None)
-        final = nxt is None or nxt[0] == "pause"
-        vowel_idx = [k for k, (s, st) in enumerate(wphones) if st is not None]
-        last_syll = vowel_idx[-1] if vowel_idx else 0
-        for k, (sym, stress) in enumerate(wphones):
-            pct = 1.0
-            in_final = final and k >= last_syll
-            if stress is None:
-                pct *= 1.0 if in_final else t["consonant"]
-            else:
-                pct *= {1: t["primary_stress"], 2: t["secondary_stress"]}.get(stress, t["unstressed"])
-                if not in_final:
-                    pct *= t["nonfinal_vowel"]
-            if in_final:
-                pct *= t["phrase_final"]
-            lo, hi = table.at[sym, "minimum"], table.at[sym, "inherent"]
-            phones.append([sym, lo + (hi - lo) * pct, len(words)])
-        words.append(it[1])
-
-    speech = sum(p[1] for p in phones)
-    scale = (n_words * 60.0 / rate_wpm) / speech
-    lead, tail = t["lead_silence_ms"] / 1000, t["tail_silence_ms"] / 1000
-    pause_before = {}
-    for k, s in pauses:
-        if k < len(phones):          # a pause after the last word is the tail silence
-            pause_before[k] = max(pause_before.get(k, 0.0), s)
-
-    # Lay the phones out in time (before any audio stretch): lead silence, phones and
-    # punctuation pauses, tail silence.
-    starts, ends, syms, word_of = [], [], [], []
-    phone_start = []               # start time of phone k (pauses excluded)
-    now = lead
-    for k, (sym, dur, w) in enumerate(phones):
-        if k in pause_before:
-            starts.append(now)
-            now += pause_before[k]
-            ends.append(now)
-            syms.append(SILENCE)
-            word_of.append(-1)
-        phone_start.append(now)
-        starts.append(now)
-        now += dur * scale
-        ends.append(now)
-        syms.append(sym)
-        word_of.append(w)
-    speech_t0, speech_t1 = lead, now
-    end_time = now + tail
-
-    def remap(x):
-        return np.asarray(x, dtype=float)
-    if audio is not None:
-        a0, a1, total = speech_span(audio)
-        stretch = (a1 - a0) / (speech_t1 - speech_t0)
-
-        def remap(x):  # noqa: F811 - the speech span mapped linearly onto the audio's
-            return a0 + (np.asarray(x, dtype=float) - speech_t0) * stretch
-        end_time = max(total, a1)
+    phones, words, emotion_at, pauses = _klatt_durations(items, t)
+    scale = (n_words * 60.0 / rate_wpm) / sum(p[1] for p in phones)
+    lead = t["lead_silence_ms"] / 1000
+    starts, ends, syms, word_of, phone_start = _lay_out(phones, pauses, scale, lead)
+    speech_t1 = ends[-1]
+    remap, end_time = _audio_map(audio, lead, speech_t1, speech_t1 + t["tail_silence_ms"] / 1000)
 
     rows_start = [0.0] + list(remap(starts))
-    rows_end = [float(remap(speech_t0))] + list(remap(ends))
+    rows_end = [float(remap(lead))] + list(remap(ends))
     rows_sym = [SILENCE] + syms
     if end_time > rows_end[-1] + 1e-9:
         rows_start.append(rows_end[-1])
@@ -517,38 +537,30 @@ def text_to_segments(text: str, rate_wpm: float | None = None, audio=None, *, pa
         rows_start, rows_end, rows_sym = rows_start[1:], rows_end[1:], rows_sym[1:]
     segments = pd.DataFrame({"start": np.array(rows_start, float), "end": np.array(rows_end, float),
                              "phoneme": pd.array(rows_sym, dtype=object)})
-
-    # Word table and emotion keys.
-    w_start = {}
-    w_end = {}
+    w_start, w_end = {}, {}
     for s, e, w in zip(remap(starts), remap(ends), word_of):
         if w >= 0:
             w_start.setdefault(w, float(s))
             w_end[w] = float(e)
-    # attrs hold plain tuples (pandas compares attrs when concatenating; DataFrames there would fail).
-    segments.attrs["words"] = tuple((w_start[i], w_end[i], words[i]) for i in range(len(words)))
-    key_times = []
-    for k, name, weight in emotion_at:
-        when = phone_start[k] if k < len(phone_start) else speech_t1
-        key_times.append((float(remap(when)) if k > 0 else 0.0, name, float(weight)))
-    segments.attrs["emotion_keys"] = tuple(key_times)
-    return segments
+    word_table = pd.DataFrame({"start": [w_start[i] for i in range(len(words))],
+                               "end": [w_end[i] for i in range(len(words))],
+                               "word": pd.Series(words, dtype=object)})
+    keys = [(float(remap(phone_start[k] if k < len(phone_start) else speech_t1)) if k > 0 else 0.0,
+             name, float(weight)) for k, name, weight in emotion_at]
+    key_table = pd.DataFrame({"time": pd.Series([k[0] for k in keys], dtype=float),
+                              "emotion": pd.Series([k[1] for k in keys], dtype=object),
+                              "weight": pd.Series([k[2] for k in keys], dtype=float)})
+    return Utterance(segments, word_table, key_table, source_format="text")
 
 
-def emotion_keys(segments: pd.DataFrame) -> pd.DataFrame:
-    """The emotion key track stored with ``segments``: DataFrame ``time``, ``emotion``, ``weight``.
+def text_to_segments(text: str, rate_wpm: float | None = None, audio=None, *, path=None,
+                     warn: bool = True) -> pd.DataFrame:
+    """The Segments of :func:`text_to_utterance` (same parameters).
 
-    Empty when there is none.
+    Examples
+    --------
+    >>> seg = text_to_segments("one five zero zero six")
+    >>> " ".join(seg.phoneme)
+    '_ w ah n f ay v z ih r ow z ih r ow s ih k s _'
     """
-    keys = segments.attrs.get("emotion_keys") or ()
-    return pd.DataFrame({"time": pd.Series([float(k[0]) for k in keys], dtype=float),
-                         "emotion": pd.Series([str(k[1]) for k in keys], dtype=object),
-                         "weight": pd.Series([float(k[2]) for k in keys], dtype=float)})
-
-
-def words(segments: pd.DataFrame) -> pd.DataFrame:
-    """The word timing stored with ``segments``: DataFrame ``start``, ``end``, ``word``."""
-    rows = segments.attrs.get("words") or ()
-    return pd.DataFrame({"start": pd.Series([float(r[0]) for r in rows], dtype=float),
-                         "end": pd.Series([float(r[1]) for r in rows], dtype=float),
-                         "word": pd.Series([str(r[2]) for r in rows], dtype=object)})
+    return text_to_utterance(text, rate_wpm, audio, path=path, warn=warn).segments

@@ -49,7 +49,7 @@ Emotions
 ``emotions`` is a mapping ``{name: weight}`` (global, from t = 0), a key track
 (DataFrame ``time``, ``emotion``, ``weight``, or a sequence of such triples; see
 :mod:`visemeface.speech.g2p`; ``neutral`` sets every emotion to 0), or None; a
-key track stored in ``segments.attrs["emotion_keys"]`` is applied too. A weight changes by a cosine
+key track of an :class:`~visemeface.speech.utterance.Utterance` passed as ``segments`` is applied too. A weight changes by a cosine
 ramp of ``emotion_ramp`` seconds centred on its key. Each frame is then
 (seed 002 §2.2.1)
 
@@ -66,18 +66,16 @@ from __future__ import annotations
 
 import csv
 import math
-import re
 from collections.abc import Mapping
 from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from visemeface.errors import InputError, choose, close_matches
-from visemeface.outputs import atomic_output
 from visemeface.postures.phonemes import CLOSURE, DECTALK, LABIODENTAL
 from visemeface.resources import data_path
+from visemeface.track import check_fps, frame_count, frame_times, load_track, make_track, save_track
 
 __all__ = ["MODES", "activation_track", "dominance_table", "emotion_weights", "load_track",
            "save_track", "speech_track"]
@@ -238,18 +236,12 @@ def _force_contacts(values, times, start, end, phones, targets, fps, edge):
     return values, strength
 
 
-def _frame_times(total: float, fps: float) -> np.ndarray:
-    n = max(1, int(math.ceil(total * fps - 1e-9)))
-    return np.arange(n) / fps
-
-
 def _speech(segments, visemes, fps, mode, edge):
     mode = choose(mode, MODES, "interpolation mode")
-    if not (isinstance(fps, (int, float)) and math.isfinite(fps) and fps > 0):
-        raise InputError(f"frame rate must be positive, got {fps!r}")
+    fps = check_fps(fps)
     start, end, phones = _check_segments(segments)
     targets, columns = _viseme_matrix(visemes, phones)
-    times = _frame_times(float(end[-1]), float(fps))
+    times = frame_times(frame_count(float(end[-1]), fps), fps)
     if mode == "coarticulation":
         values = _coarticulation(times, start, end, phones, targets, edge)
     else:
@@ -262,9 +254,7 @@ def speech_track(segments: pd.DataFrame, visemes: pd.DataFrame, fps: float = 30.
                  mode: str = "coarticulation", edge: float = 0.06) -> pd.DataFrame:
     """The viseme part of the track (no emotion, no clamping); see the module doc."""
     times, values, columns, _ = _speech(segments, visemes, fps, mode, edge)
-    track = pd.DataFrame(values, index=pd.Index(times, name="time"), columns=columns)
-    track.attrs["fps"] = float(fps)
-    return track
+    return make_track(times, values, columns, fps)
 
 
 # ----------------------------------------------------------------------------- emotions
@@ -331,6 +321,41 @@ def _check_weight(name, w):
     return w
 
 
+def _add_emotions(times, values, columns, contact_strength, base, key_track, expressions, ramp,
+                  table_lo, table_hi):
+    """Add the weighted emotions to the speech values (module doc); widens the clamp ranges."""
+    names = sorted(set(base) | (set(key_track["emotion"].astype(str)) - {"neutral"} if key_track is not None
+                                else set()))
+    if not names:
+        return values, columns
+    if expressions is None:
+        from visemeface.postures.library import load_expressions
+        expressions = load_expressions()
+    expr = expressions.select_dtypes(include="number")
+    known = [str(i) for i in expr.index]
+    for n in names:
+        if n not in known:
+            raise InputError(f"unknown emotion {n!r}{close_matches(n, known)}")
+    if key_track is not None:
+        for _, row in key_track.iterrows():
+            if str(row["emotion"]) != "neutral":
+                _check_weight(row["emotion"], row["weight"])
+    extra = [c for c in expr.columns if c not in columns]
+    if extra:
+        columns = columns + [str(c) for c in extra]
+        values = np.hstack([values, np.zeros((values.shape[0], len(extra)))])
+    E = expr.reindex(columns=columns, fill_value=0.0).loc[names].to_numpy(dtype=float)
+    added = emotion_weights(times, names, base, key_track, ramp) @ E
+    # Keep lip closure / contact: the emotion does not move the lip-opening functions
+    # while a p b m f v target is forced.
+    mouth = [j for j, c in enumerate(columns) if c in _LIP_OPENING_COLUMNS]
+    added[:, mouth] *= (1.0 - contact_strength)[:, None]
+    for c in expr.columns:
+        table_lo[c] = min(table_lo.get(c, 0.0), float(expr[c].min()))
+        table_hi[c] = max(table_hi.get(c, 1.0), float(expr[c].max()))
+    return values + added, columns
+
+
 def activation_track(segments: pd.DataFrame, visemes: pd.DataFrame, fps: float = 30.0,
                      mode: str = "coarticulation", emotions=None, expressions: pd.DataFrame | None = None,
                      ranges: Mapping[str, tuple[float, float]] | None = None, edge: float = 0.06,
@@ -339,9 +364,9 @@ def activation_track(segments: pd.DataFrame, visemes: pd.DataFrame, fps: float =
 
     Parameters
     ----------
-    segments : Segments
-        DataFrame ``start``, ``end``, ``phoneme`` (DECtalk); an emotion key
-        track in ``attrs["emotion_keys"]`` is applied.
+    segments : Segments or Utterance
+        DataFrame ``start``, ``end``, ``phoneme`` (DECtalk), or an Utterance
+        whose emotion key track is applied too.
     visemes : DataFrame
         Index DECtalk symbol, numeric columns = rig function names
         (non-numeric columns such as notes are ignored).
@@ -377,47 +402,25 @@ def activation_track(segments: pd.DataFrame, visemes: pd.DataFrame, fps: float =
     >>> track.loc[0.25].tolist()        # the frame at the centre of /m/
     [0.0, 0.8]
     """
+    from visemeface.speech.utterance import Utterance
+
+    keys = []
+    if isinstance(segments, Utterance):
+        keys.append(_keys_frame(segments.emotion_keys))
+        segments = segments.segments
     times, values, columns, contact_strength = _speech(segments, visemes, fps, mode, edge)
     base: dict[str, float] = {}
-    keys = [_keys_frame(segments.attrs.get("emotion_keys"))] if "emotion_keys" in segments.attrs else []
     if isinstance(emotions, Mapping):
         base = {str(k): _check_weight(k, v) for k, v in emotions.items()}
     elif emotions is not None:
         keys.append(_keys_frame(emotions))
     keys = [k for k in keys if len(k)]
     key_track = pd.concat(keys, ignore_index=True) if keys else None
-    names = sorted(set(base) | (set(key_track["emotion"].astype(str)) - {"neutral"} if key_track is not None
-                                else set()))
     table_lo = visemes.select_dtypes(include="number").min().to_dict()
     table_hi = visemes.select_dtypes(include="number").max().to_dict()
-    if names:
-        if expressions is None:
-            from visemeface.postures.library import load_expressions
-            expressions = load_expressions()
-        expr = expressions.select_dtypes(include="number")
-        known = [str(i) for i in expr.index]
-        for n in names:
-            if n not in known:
-                raise InputError(f"unknown emotion {n!r}{close_matches(n, known)}")
-        if key_track is not None:
-            for _, row in key_track.iterrows():
-                if str(row["emotion"]) != "neutral":
-                    _check_weight(row["emotion"], row["weight"])
-        extra = [c for c in expr.columns if c not in columns]
-        if extra:
-            columns += [str(c) for c in extra]
-            values = np.hstack([values, np.zeros((values.shape[0], len(extra)))])
-        E = expr.reindex(columns=columns, fill_value=0.0).loc[names].to_numpy(dtype=float)
-        W = emotion_weights(times, names, base, key_track, emotion_ramp)
-        added = W @ E
-        # Keep lip closure / contact: the emotion does not move the lip-opening functions
-        # while a p b m f v target is forced.
-        mouth = [j for j, c in enumerate(columns) if c in _LIP_OPENING_COLUMNS]
-        added[:, mouth] *= (1.0 - contact_strength)[:, None]
-        values = values + added
-        for c in expr.columns:
-            table_lo[c] = min(table_lo.get(c, 0.0), float(expr[c].min()))
-            table_hi[c] = max(table_hi.get(c, 1.0), float(expr[c].max()))
+    if base or key_track is not None:
+        values, columns = _add_emotions(times, values, columns, contact_strength, base, key_track,
+                                        expressions, emotion_ramp, table_lo, table_hi)
     lo = np.array([min(0.0, table_lo.get(c, 0.0)) for c in columns])
     hi = np.array([max(1.0, table_hi.get(c, 1.0)) for c in columns])
     if ranges is not None:
@@ -425,98 +428,4 @@ def activation_track(segments: pd.DataFrame, visemes: pd.DataFrame, fps: float =
             if c in ranges:
                 lo[j], hi[j] = ranges[c]
     values = np.clip(values, lo, hi)
-    track = pd.DataFrame(values, index=pd.Index(times, name="time"), columns=columns)
-    track.attrs["fps"] = float(fps)
-    return track
-
-
-# ----------------------------------------------------------------------------- CSV
-
-_FPS_LINE = re.compile(r"fps\s*=\s*([0-9.eE+-]+)")
-
-
-def save_track(track: pd.DataFrame, path, force: bool = False) -> Path:
-    """Write an ActivationTrack as CSV: a ``# ... fps=<fps>`` line, then ``time`` and the columns.
-
-    Written atomically (never half a file; refuses to overwrite unless ``force``).
-    Floats are written with full precision, so :func:`load_track` returns the same numbers.
-    """
-    fps = track.attrs.get("fps")
-    if fps is None:
-        raise InputError("the track has no frame rate (attrs['fps'])")
-    with atomic_output(path, force) as tmp:
-        with open(tmp, "w", encoding="utf-8", newline="") as f:
-            f.write(f"# visemeface activation track; fps={float(fps)!r}\n")
-            track.to_csv(f, index=True, index_label="time", lineterminator="\n")
-    return Path(path)
-
-
-def load_track(path) -> pd.DataFrame:
-    """Read an ActivationTrack CSV (from :func:`save_track`, or any CSV with a ``time`` column).
-
-    The frame rate comes from the ``fps=`` comment line, else from the time step.
-
-    Raises
-    ------
-    InputError
-        Missing file, no ``time`` column, a cell that is not a finite number
-        (with its line), times not increasing.
-    """
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise InputError("track not found", path) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read track: {exc}", path) from None
-    lines = text.splitlines()
-    fps = None
-    skip = 0
-    while skip < len(lines) and lines[skip].lstrip().startswith("#"):
-        m = _FPS_LINE.search(lines[skip])
-        if m:
-            try:
-                fps = float(m.group(1))
-            except ValueError:
-                raise InputError(f"bad frame rate {m.group(1)!r}", path, skip + 1) from None
-        skip += 1
-    rows = list(csv.reader(lines[skip:]))
-    if not rows or "time" not in [h.strip() for h in rows[0]]:
-        raise InputError("track CSV has no 'time' column", path, skip + 1)
-    header = [h.strip() for h in rows[0]]
-    data = []
-    for k, rec in enumerate(rows[1:], start=skip + 2):
-        if not any(c.strip() for c in rec):
-            continue
-        if len(rec) != len(header):
-            raise InputError(f"expected {len(header)} values, got {len(rec)}", path, k)
-        try:
-            vals = [float(c) for c in rec]
-        except ValueError:
-            bad = next(c for c in rec if not _is_float(c))
-            raise InputError(f"value {bad!r} is not a number", path, k) from None
-        if not all(math.isfinite(v) for v in vals):
-            raise InputError("non-finite value", path, k)
-        data.append(vals)
-    if not data:
-        raise InputError("track CSV has no frames", path, skip + 1)
-    arr = np.array(data)
-    ti = header.index("time")
-    times = arr[:, ti]
-    if (np.diff(times) <= 0).any():
-        k = int(np.flatnonzero(np.diff(times) <= 0)[0])
-        raise InputError("times must increase", path, skip + 3 + k)
-    if fps is None:
-        fps = 1.0 / float(np.median(np.diff(times))) if times.size > 1 else 30.0
-    cols = [h for j, h in enumerate(header) if j != ti]
-    track = pd.DataFrame(np.delete(arr, ti, axis=1), index=pd.Index(times, name="time"), columns=cols)
-    track.attrs["fps"] = float(fps)
-    return track
-
-
-def _is_float(s: str) -> bool:
-    try:
-        float(s)
-    except ValueError:
-        return False
-    return True
+    return make_track(times, values, columns, fps)

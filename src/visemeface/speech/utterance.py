@@ -1,0 +1,55 @@
+"""What an utterance is made of: timed phones, and optionally its words and emotion keys.
+
+The readers and the text front end return an :class:`Utterance`; everything
+the animation needs travels in its fields, not in ``DataFrame.attrs``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import pandas as pd
+
+#: Timed DECtalk phones: DataFrame ``start``, ``end`` (s), ``phoneme`` (docs/conventions.md).
+Segments = pd.DataFrame
+
+
+def no_words() -> pd.DataFrame:
+    """An empty word table (``start``, ``end``, ``word``)."""
+    return pd.DataFrame({"start": pd.Series(dtype=float), "end": pd.Series(dtype=float),
+                         "word": pd.Series(dtype=object)})
+
+
+def no_emotion_keys() -> pd.DataFrame:
+    """An empty emotion key track (``time``, ``emotion``, ``weight``)."""
+    return pd.DataFrame({"time": pd.Series(dtype=float), "emotion": pd.Series(dtype=object),
+                         "weight": pd.Series(dtype=float)})
+
+
+@dataclass(frozen=True)
+class Utterance:
+    """An utterance ready to animate.
+
+    Attributes
+    ----------
+    segments : Segments
+        Timed DECtalk phones, contiguous from 0.
+    words : DataFrame
+        ``start``, ``end``, ``word`` (empty when the source had no words).
+    emotion_keys : DataFrame
+        ``time``, ``emotion``, ``weight``: inline emotion tags of a text
+        (``[anger 0.8] ...``), applied by
+        :func:`visemeface.speech.timeline.activation_track`; empty if none.
+    source_format : str
+        The transcript format it was read from (``"text"`` for English text).
+    """
+
+    segments: Segments
+    words: pd.DataFrame = field(default_factory=no_words)
+    emotion_keys: pd.DataFrame = field(default_factory=no_emotion_keys)
+    source_format: str = ""
+
+    @property
+    def end(self) -> float:
+        """End of the last segment (s): the utterance's length."""
+        return float(self.segments["end"].iloc[-1]) if len(self.segments) else 0.0
