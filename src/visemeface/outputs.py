@@ -1,17 +1,24 @@
 """Safe output files: never overwrite without ``force``, never leave half a file.
 
-Every command that writes files goes through :func:`atomic_output` (one file)
-or :func:`atomic_dir` (a folder of files): the work is written under a
-temporary name next to the target and renamed into place only when it is
-complete, so an error or Ctrl-C leaves nothing half written.
+Every file or folder a command writes is *staged*: written under a temporary
+name beside its target and renamed into place only when complete. One output
+uses :func:`atomic_output` (a file) or :func:`atomic_dir` (a folder); a run
+with several outputs stages each (:class:`Staged`) and commits them together
+only after all of them are complete (:class:`visemeface.pipeline`), so a run
+writes all of its outputs or none.
+
+Temporaries are named ``.<target name>.vf<pid>~<suffix>`` (the suffix kept:
+ffmpeg picks the format from it). A process killed outright (SIGKILL, power
+loss) cannot remove its own; the next run writing the same target removes
+every temporary of that target whose process is gone (:func:`remove_stale`).
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import re
 import shutil
-import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -26,11 +33,20 @@ def _umask_mode(mode: int) -> int:
     return mode & ~umask
 
 
-def check_new(path: str | Path, force: bool = False) -> Path:
-    """Return ``path`` as a Path; refuse it if it exists and ``force`` is false."""
+def check_new(path: str | Path, force: bool = False, folder: bool | None = None) -> Path:
+    """Return ``path`` as a Path; refuse it if it exists and ``force`` is false.
+
+    ``folder`` True/False also refuses replacing a file by a folder or a folder by
+    a file (even with ``force``: that is almost always a typo).
+    """
     path = Path(path)
-    if path.exists() and not force:
-        raise InputError("output exists; use --force to overwrite", path)
+    if path.exists() or path.is_symlink():
+        if not force:
+            raise InputError("output exists; use --force to overwrite", path)
+        if folder is False and path.is_dir():
+            raise InputError("output exists and is a folder, not a file", path)
+        if folder is True and not path.is_dir():
+            raise InputError("output exists and is a file, not a folder", path)
     parent = path.parent
     if not parent.exists():
         raise InputError("output folder does not exist", parent)
@@ -49,52 +65,117 @@ def check_suffix(path: str | Path, *suffixes: str) -> Path:
     return path
 
 
-def _temporary(make, path: Path):
-    """Run ``make()`` (mkstemp/mkdtemp beside ``path``); OS refusals become InputError."""
+def _temporary_name(path: Path, pid: int | None = None) -> Path:
+    return path.with_name(f".{path.name}.vf{os.getpid() if pid is None else pid}~{path.suffix}")
+
+
+def _pid_alive(pid: int) -> bool:
     try:
-        return make()
-    except OSError as exc:
-        raise InputError(f"cannot write here: {exc.strerror}", path) from None
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
 
 
-@contextlib.contextmanager
-def atomic_output(path: str | Path, force: bool = False) -> Iterator[Path]:
-    """Yield a temporary path to write; rename it to ``path`` on success.
+def remove_stale(path: str | Path) -> list[Path]:
+    """Remove the temporaries of ``path`` left by processes that no longer run; return them."""
+    path = Path(path)
+    pattern = re.compile(rf"^\.{re.escape(path.name)}\.vf(\d+)~")
+    removed = []
+    try:
+        entries = list(path.parent.iterdir())
+    except OSError:
+        return removed
+    for p in entries:
+        m = pattern.match(p.name)
+        if m and int(m.group(1)) != os.getpid() and not _pid_alive(int(m.group(1))):
+            shutil.rmtree(p, ignore_errors=True) if p.is_dir() and not p.is_symlink() else p.unlink(missing_ok=True)
+            removed.append(p)
+    return removed
 
-    The temporary file keeps the target's suffix (tools such as ffmpeg pick the
-    format from it) and lives in the same folder, so the final rename is atomic.
+
+class Staged:
+    """One output written under a temporary name, renamed into place by :meth:`commit`.
+
+    Parameters
+    ----------
+    path : str or Path
+        The target.
+    force : bool
+        Replace an existing target (of the same kind).
+    folder : bool
+        Stage a folder instead of a file.
+
+    The target is checked when the object is made (before any work); :meth:`open`
+    creates the temporary (removing stale ones of the same target) and returns it;
+    :meth:`commit` renames it into place; :meth:`abort` removes it.
     """
-    path = check_new(path, force)
-    fd, tmp = _temporary(lambda: tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix,
-                                                 dir=path.parent), path)
-    os.close(fd)
-    tmp = Path(tmp)
-    try:
-        yield tmp
-        # mkstemp makes 0600 files; give the result the mode a plain open() would.
-        os.chmod(tmp, _umask_mode(0o666))
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+
+    def __init__(self, path: str | Path, force: bool = False, folder: bool = False):
+        self.path = check_new(path, force, folder=folder)
+        self.force, self.folder = force, folder
+        self.tmp: Path | None = None
+
+    def open(self) -> Path:
+        remove_stale(self.path)
+        tmp = _temporary_name(self.path)
+        try:
+            if tmp.exists():
+                shutil.rmtree(tmp) if tmp.is_dir() else tmp.unlink()
+            tmp.mkdir() if self.folder else tmp.touch()
+        except OSError as exc:
+            raise InputError(f"cannot write here: {exc.strerror}", self.path) from None
+        self.tmp = tmp
+        return tmp
+
+    def commit(self) -> Path:
+        tmp, self.tmp = self.tmp, None
+        os.chmod(tmp, _umask_mode(0o777 if self.folder else 0o666))
+        if self.folder and self.path.is_dir():
+            shutil.rmtree(self.path)          # os.replace cannot replace a non-empty folder
+        os.replace(tmp, self.path)
+        return self.path
+
+    def abort(self) -> None:
+        tmp, self.tmp = self.tmp, None
+        if tmp is None:
+            return
+        if tmp.is_dir() and not tmp.is_symlink():
+            shutil.rmtree(tmp, ignore_errors=True)
+        else:
+            tmp.unlink(missing_ok=True)
 
 
 @contextlib.contextmanager
-def atomic_dir(path: str | Path, force: bool = False) -> Iterator[Path]:
-    """Yield a temporary folder to fill; move it to ``path`` on success."""
-    path = check_new(path, force)
-    tmp = Path(_temporary(lambda: tempfile.mkdtemp(prefix=f".{path.name}.", dir=path.parent), path))
+def _staged(path, force: bool, folder: bool) -> Iterator[Path]:
+    out = Staged(path, force, folder)
+    tmp = out.open()
     try:
         yield tmp
-        os.chmod(tmp, _umask_mode(0o777))
-        if path.exists():
-            shutil.rmtree(path) if path.is_dir() else path.unlink()
-        os.replace(tmp, path)
     except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
+        out.abort()
         raise
+    out.commit()
 
 
-def progress(iterable=None, total: int | None = None, desc: str | None = None, unit: str = "frame", **kw):
-    """A tqdm progress bar on stderr, silent when stderr is not a terminal."""
-    return tqdm(iterable, total=total, desc=desc, unit=unit, disable=None, dynamic_ncols=True, **kw)
+def atomic_output(path: str | Path, force: bool = False):
+    """Context manager: yield a temporary file path to write; rename it to ``path`` on success.
+
+    The temporary keeps the target's suffix and lives in the same folder, so the
+    rename is atomic; an error or Ctrl-C removes it.
+    """
+    return _staged(path, force, folder=False)
+
+
+def atomic_dir(path: str | Path, force: bool = False):
+    """Context manager: yield a temporary folder to fill; move it to ``path`` on success."""
+    return _staged(path, force, folder=True)
+
+
+def progress(iterable=None, total: int | None = None, desc: str | None = None, unit: str = "frame",
+             show: bool = True, **kw):
+    """A tqdm progress bar on stderr, silent when stderr is not a terminal (or ``show`` is false)."""
+    return tqdm(iterable, total=total, desc=desc, unit=unit, disable=None if show else True,
+                dynamic_ncols=True, **kw)

@@ -10,34 +10,42 @@ import soundfile as sf
 from visemeface import pipeline
 from visemeface.cli import main
 from visemeface.errors import InputError
+from visemeface.muscles.morphs import JAW_SAMPLES
 from visemeface.render import export
 
 
 # ----------------------------------------------------------------------------- checks before work
 
-def test_plan_outputs_refuses_existing_and_duplicates(tmp_path):
-    existing = tmp_path / "a.mp4"
-    existing.write_bytes(b"user")
-    with pytest.raises(InputError, match="exists"):
-        pipeline.plan_outputs(pipeline.Outputs(video=existing))
-    pipeline.plan_outputs(pipeline.Outputs(video=existing, force=True))
-    with pytest.raises(InputError, match="same path"):
-        pipeline.plan_outputs(pipeline.Outputs(video=tmp_path / "b.mp4", gltf=tmp_path / "b.mp4"))
-    with pytest.raises(InputError, match="--resume needs --frames"):
-        pipeline.plan_outputs(pipeline.Outputs(video=tmp_path / "b.mp4", resume=True))
-    with pytest.raises(InputError, match=r"\.glb"):
-        pipeline.plan_outputs(pipeline.Outputs(gltf=tmp_path / "b.gltf"))
-    with pytest.raises(InputError, match="nothing to write"):
-        pipeline.plan_outputs(pipeline.Outputs())
-    with pytest.raises(InputError, match="folder does not exist"):
-        pipeline.plan_outputs(pipeline.Outputs(pc2=tmp_path / "no" / "x.pc2"))
+def test_outputs_are_checked_before_any_work(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "s.txt").write_text(SHORT)
+    (tmp_path / "a.mp4").write_bytes(b"user")
+    cases = [
+        (["-o", "a.mp4"], "a.mp4: output exists; use --force"),
+        (["--track", "t.csv", "--measures", "t.csv"], "same path"),
+        (["--gltf", "b.gltf"], ".glb"),
+        (["--no-video"], "nothing to write"),
+        (["--pc2", "no/x.pc2"], "folder does not exist"),
+        (["--no-video", "-o", "c.mp4"], "--no-video"),
+    ]
+    for extra, message in cases:
+        code = main(["speak", "s.txt", "--size", "32"] + extra)
+        err = capsys.readouterr().err
+        assert code == 2 and message in err and err.count("\n") == 1, (extra, err)
     (tmp_path / "fr").mkdir()
-    with pytest.raises(InputError, match="fr: output exists"):
-        pipeline.plan_outputs(pipeline.Outputs(frames=tmp_path / "fr"))
-    pipeline.plan_outputs(pipeline.Outputs(frames=tmp_path / "fr", resume=True))
+    assert main(["speak", "s.txt", "--size", "32", "--frames", "fr"]) == 2
+    assert "fr: output exists" in capsys.readouterr().err
     (tmp_path / "fr").rmdir()
-    assert existing.read_bytes() == b"user"
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.mp4"]
+    assert (tmp_path / "a.mp4").read_bytes() == b"user"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.mp4", "s.txt"]
+
+
+def test_a_folder_in_the_way_of_a_file_is_refused_even_with_force(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "s.txt").write_text(SHORT)
+    (tmp_path / "d.mp4").mkdir()
+    assert main(["speak", "s.txt", "--size", "32", "-o", "d.mp4", "--force"]) == 2
+    assert "d.mp4: output exists and is a folder" in capsys.readouterr().err
 
 
 def test_check_audio(tmp_path):
@@ -48,82 +56,18 @@ def test_check_audio(tmp_path):
         pipeline.check_audio(tmp_path / "bad.wav")
     with pytest.raises(InputError, match="not found"):
         pipeline.check_audio(tmp_path / "none.wav")
+    sf.write(tmp_path / "nan.wav", np.full(8000, np.nan, np.float32), 16000, subtype="FLOAT")
+    with pytest.raises(InputError, match="nan.wav: audio holds non-finite samples"):
+        pipeline.check_audio(tmp_path / "nan.wav")
 
 
 def test_parse_emotions_checks_names():
-    assert pipeline.parse_emotions(["happiness=0.6", "anger"], ["happiness", "anger"]) == {
-        "happiness": 0.6, "anger": 1.0}
+    from visemeface.commands.speak import parse_emotions
+
+    assert parse_emotions(["happiness=0.6", "anger"], ["happiness", "anger"]) == {"happiness": 0.6, "anger": 1.0}
     with pytest.raises(InputError, match="did you mean: happiness"):
-        pipeline.parse_emotions(["hapiness=0.5"], ["happiness", "anger"])
-    assert pipeline.parse_emotions(None, ["happiness"]) == {}
-
-
-# ----------------------------------------------------------------------------- resumable frames
-
-def _img(i):
-    return np.full((16, 16, 3), i, np.uint8)
-
-
-def test_frame_folder_interrupted_then_resumed(tmp_path):
-    target = tmp_path / "frames"
-    ff = pipeline.FrameFolder(target, key="k1")
-    ff.check()
-    with pytest.warns(UserWarning, match="2 finished frame"), pytest.raises(KeyboardInterrupt):
-        with ff:
-            ff.write(0, _img(0))
-            ff.write(1, _img(1))
-            raise KeyboardInterrupt
-    partial = tmp_path / "frames.partial"
-    assert sorted(p.name for p in partial.iterdir()) == [pipeline.MANIFEST, "frame_000000.png",
-                                                         "frame_000001.png"]
-    assert not target.exists()
-
-    # other settings: refused before any work, nothing touched
-    other = pipeline.FrameFolder(target, key="k2", resume=True)
-    with pytest.raises(InputError, match="another transcript or other settings"):
-        other.check()
-
-    ff = pipeline.FrameFolder(target, key="k1", resume=True)
-    ff.check()
-    with ff:
-        got = []
-        for i in range(3):
-            if ff.has(i):
-                got.append(ff.read(i, (16, 16, 3)))
-            else:
-                ff.write(i, _img(i))
-        assert ff.read(0, (32, 32, 3)) is None  # a frame of another size is not reused
-        ff.finish(3)
-    assert (ff.kept, ff.rendered) == (2, 1)
-    np.testing.assert_array_equal(got[1], _img(1))
-    assert not partial.exists()
-    assert sorted(p.name for p in target.glob("*.png")) == [export.frame_name(i) for i in range(3)]
-    assert json.loads((target / pipeline.MANIFEST).read_text())["key"] == "k1"
-
-
-def test_frame_folder_without_resume_refuses_existing_and_restarts_partial(tmp_path):
-    target = tmp_path / "frames"
-    target.mkdir()
-    with pytest.raises(InputError, match="exists"):
-        pipeline.FrameFolder(target, key="k").check()
-    # a stale partial run of ours is discarded without --resume
-    partial = tmp_path / "new.partial"
-    partial.mkdir()
-    (partial / pipeline.MANIFEST).write_text(json.dumps({"key": "old"}))
-    export.write_png(partial / export.frame_name(0), _img(9))
-    ff = pipeline.FrameFolder(tmp_path / "new", key="k")
-    ff.check()
-    with ff:
-        assert not ff.has(0)
-        ff.write(1, _img(1))
-        ff.finish(2)
-    assert sorted(p.name for p in (tmp_path / "new").glob("*.png")) == ["frame_000001.png"]
-    # a folder we did not make is never deleted
-    (tmp_path / "x.partial").mkdir()
-    (tmp_path / "x.partial" / "mine.txt").write_text("user")
-    with pytest.raises(InputError, match="not made by visemeface"):
-        pipeline.FrameFolder(tmp_path / "x", key="k").check()
-    assert (tmp_path / "x.partial" / "mine.txt").exists()
+        parse_emotions(["hapiness=0.5"], ["happiness", "anger"])
+    assert parse_emotions(None, ["happiness"]) == {}
 
 
 # ----------------------------------------------------------------------------- CLI errors
@@ -189,8 +133,8 @@ def test_speak_end_to_end_all_exports(short, capsys):
     assert code == 0, capsys.readouterr().err
     assert "24 frames" in capsys.readouterr().out
     names = sorted(p.name for p in short.iterdir())
-    assert names == ["fr", "obj", "s.csv", "s.glb", "s.pc2", "short.mp4", "short.mp4.json", "short.txt",
-                     "short.wav"]
+    assert names == ["fr", "fr.json", "obj", "s.csv", "s.glb", "s.pc2", "short.mp4", "short.mp4.json",
+                     "short.txt", "short.wav"]
 
     # MP4: one frame per track row, audio muxed for exactly as long, starting at 0
     info = export.read_video_info(short / "short.mp4")
@@ -203,7 +147,7 @@ def test_speak_end_to_end_all_exports(short, capsys):
     assert len(track) == N_SHORT and track.attrs["fps"] == 30
     pts, head = export.read_pc2(short / "s.pc2")
     assert pts.shape == (N_SHORT, len(rig.face.vertices), 3) and head["num_samples"] == N_SHORT
-    a = pipeline.track_matrix(track, rig)
+    a = rig.clamp(rig.track_matrix(track))
     for i in (0, 8, 13):
         np.testing.assert_allclose(pts[i], rig.pose(a[i]), atol=1e-6)
     import trimesh
@@ -244,7 +188,7 @@ def test_speak_end_to_end_all_exports(short, capsys):
     prim = gl.meshes[0].primitives[0]
     tnames = gl.meshes[0].extras["targetNames"]
     assert tnames[:25] == list(rig.names[:25])
-    assert all(n.startswith("jaw@") for n in tnames[25:]) and len(tnames) >= 25 + pipeline.JAW_SAMPLES
+    assert all(n.startswith("jaw@") for n in tnames[25:]) and len(tnames) >= 25 + JAW_SAMPLES
     assert len(prim.targets) == len(tnames)
     sampler = gl.animations[0].samplers[0]
     times = arr(sampler.input)
@@ -383,10 +327,12 @@ def test_say_text_to_video(short, capsys):
 
 
 def test_speak_formats_match_reader():
-    from visemeface.commands.speak import FORMATS
+    from visemeface.cli import build_parser
     from visemeface.speech.transcripts import FORMATS as READER_FORMATS
 
-    assert set(FORMATS) == {"auto", *READER_FORMATS}
+    speak = build_parser()._subparsers._group_actions[0].choices["speak"]
+    fmt = next(a for a in speak._actions if a.dest == "format")
+    assert set(fmt.choices) == {"auto", *READER_FORMATS}
 
 
 def test_speak_plain_text_transcript_with_rate(short):
@@ -410,23 +356,26 @@ TINY = """0.00 0.05 _
 
 
 @pytest.fixture
-def coarse_rig(monkeypatch):
-    from visemeface.muscles import rig as rig_mod
+def coarse_rig(short):
+    """A coarse default face (1500 vertices) exported as a user's mesh: speak --face coarse.obj."""
+    from visemeface.face.mesh import load_face
+    from visemeface.face.procedural import default_face
+    from visemeface.muscles.rig import MuscleRig
     from visemeface.runtime import set_threads
 
     set_threads(1)
-    coarse = rig_mod.default_rig(resolution=1500)
-    monkeypatch.setattr(rig_mod, "default_rig", lambda resolution=None: coarse)
-    return coarse
+    default_face(resolution=1500).save(short / "coarse.obj")
+    return MuscleRig.from_file(load_face(short / "coarse.obj"))
 
 
 @pytest.mark.slow
 def test_speak_physics_frames_come_from_the_fem_face(short, capsys, coarse_rig):
     (short / "tiny.txt").write_text(TINY)
-    code = main(["speak", "tiny.txt", "--size", "64", "--msaa", "0", "--physics", "elastic",
-                 "--pc2", "e.pc2", "--track", "e.csv", "-q"])
+    code = main(["speak", "tiny.txt", "--face", "coarse.obj", "--size", "64", "--msaa", "0", "--physics",
+                 "elastic", "--pc2", "e.pc2", "--track", "e.csv", "-q"])
     assert code == 0, capsys.readouterr().err
-    code = main(["speak", "tiny.txt", "--size", "64", "--msaa", "0", "--no-video", "--pc2", "k.pc2", "-q"])
+    code = main(["speak", "tiny.txt", "--face", "coarse.obj", "--size", "64", "--msaa", "0", "--no-video",
+                 "--pc2", "k.pc2", "-q"])
     assert code == 0, capsys.readouterr().err
     from visemeface.physics.face_model import build_fem_face
 
@@ -462,10 +411,11 @@ def test_speak_physics_bad_input_exits_2_before_simulating(short, capsys, coarse
 
     def no_frames(self, start=None):
         raise AssertionError("simulated despite bad input")
+        yield
 
     monkeypatch.setattr(drive.StickySimulation, "frames", no_frames)
     (short / "tiny.txt").write_text(TINY)
-    code = main(["speak", "tiny.txt", "--size", "64"] + extra)
+    code = main(["speak", "tiny.txt", "--face", "coarse.obj", "--size", "64"] + extra)
     err = capsys.readouterr().err
     assert code == 2 and message in err and err.count("\n") == 1
     assert not (short / "tiny.mp4").exists()

@@ -320,15 +320,13 @@ def test_one_track_conversion_for_every_consumer():
     rest (0), unknown columns and non-finite values are errors, clamping warns."""
     import pandas as pd
 
-    from visemeface.pipeline import track_matrix
-
     rig = default_rig()
     track = pd.DataFrame({"jaw": [0.0, 0.5, 2.0], "orbicularis_oris": [0.0, 0.3, 0.3]},
                          index=pd.Index([0.0, 1 / 30, 2 / 30], name="time"))
     A = rig.track_matrix(track)
     assert A.shape == (3, len(rig.names)) and A[:, rig.names.index("zygomatic_major_left")].sum() == 0
-    with pytest.warns(UserWarning, match="jaw"):
-        clamped = track_matrix(track, rig)
+    with pytest.warns(UserWarning, match="jaw=2 -> 1 in 1 frames"):
+        clamped = rig.clamp(rig.track_matrix(track))
     assert clamped[2, rig.names.index("jaw")] == rig.ranges[rig.names.index("jaw"), 1]
     with pytest.warns(UserWarning):
         np.testing.assert_allclose(rig.poses(track)[1], rig.pose(clamped[1]), atol=1e-6)

@@ -224,10 +224,15 @@ def test_mp4_error_leaves_no_file_and_refuses_overwrite(tmp_path):
 def test_vertex_normals_plane_and_sphere():
     import trimesh
 
+    from visemeface.face.mesh import vertex_normals
+
     v, _, tris = grid_mesh()
-    np.testing.assert_allclose(export.vertex_normals(v, tris), np.tile([0, 0, 1.0], (len(v), 1)))
+    np.testing.assert_allclose(vertex_normals(v, tris), np.tile([0, 0, 1.0], (len(v), 1)))
+    # glTF needs unit normals everywhere: a vertex in no triangle gets +z
+    isolated = np.vstack([v, [[5.0, 5.0, 5.0]]])
+    np.testing.assert_allclose(export.unit_normals(vertex_normals(isolated, tris))[-1], [0, 0, 1.0])
     s = trimesh.creation.icosphere(subdivisions=3, radius=2.0)
-    n = export.vertex_normals(s.vertices, s.faces)
+    n = vertex_normals(s.vertices, s.faces)
     radial = s.vertices / np.linalg.norm(s.vertices, axis=1, keepdims=True)
     assert np.min(np.sum(n * radial, axis=1)) > 0.99
 

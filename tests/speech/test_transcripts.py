@@ -515,11 +515,6 @@ def test_property_any_text_with_detection(tmp_path, content):
     check_reader(tmp_path, "any.txt", content, None, False)
 
 
-def test_formats_list_matches_cli():
-    from visemeface.commands.speak import FORMATS as CLI_FORMATS
-    assert set(CLI_FORMATS) - {"auto"} == set(FORMATS)
-
-
 # ----------------------------------------------------------------------------- wrong input that used to pass
 
 def test_a_transcript_of_comments_only_is_empty_not_english(tmp_path):

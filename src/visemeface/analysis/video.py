@@ -9,17 +9,8 @@ Sources
 
 Mouth-box sidecar (the format this project's renderer writes)
 -------------------------------------------------------------
-A JSON object next to the video, found as ``<video>.json`` (e.g.
-``take1.mp4.json``, or ``frames.json`` for a folder ``frames/``), else
-``<video stem>.json`` (``take1.json``), or given explicitly::
-
-    {"mouth_box": [x, y, w, h],   # pixels, origin top-left, x right, y down;
-                                  # x and x + w on the mouth corners at rest
-     "fps": 30.0,                 # frame rate (used for image folders)
-     "size": [width, height]}     # frame size in pixels, checked against the video
-
-Only ``mouth_box`` is required. ``w`` is the natural mouth width that
-normalises every metric.
+``<video>.json`` beside the video (``take1.mp4.json``, or ``frames.json`` for a
+folder ``frames/``), or given explicitly: see :mod:`visemeface.sidecars`.
 """
 
 from __future__ import annotations
@@ -165,63 +156,8 @@ def parse_box(text: str) -> MouthBox:
     return MouthBox.of(vals)
 
 
-def sidecar_path(video: str | Path) -> Path | None:
-    """The sidecar JSON of a video or folder if one exists (see module docstring)."""
-    video = Path(video)
-    for cand in (video.parent / (video.name + ".json"), video.with_suffix(".json")):
-        if cand.is_file() and cand != video:
-            return cand
-    return None
-
-
-@dataclass(frozen=True)
-class Sidecar:
-    """Contents of a mouth-box sidecar."""
-
-    mouth_box: MouthBox
-    fps: float | None = None
-    size: tuple[int, int] | None = None
-
-
-def read_sidecar(path: str | Path) -> Sidecar:
-    """Read a mouth-box sidecar JSON: ``{"mouth_box": [x, y, w, h], "fps": .., "size": [w, h]}``."""
-    path = Path(path)
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError("no such file", path) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read: {exc}", path) from None
-    except json.JSONDecodeError as exc:
-        raise InputError(f"not valid JSON: {exc.msg}", path, exc.lineno) from None
-    if not isinstance(data, dict) or "mouth_box" not in data:
-        raise InputError('expected a JSON object with "mouth_box": [x, y, w, h]', path)
-    try:
-        box = MouthBox.of(data["mouth_box"])
-    except InputError as exc:
-        raise InputError(exc.reason, path) from None
-    fps = data.get("fps")
-    if fps is not None:
-        if not isinstance(fps, (int, float)) or not fps > 0:
-            raise InputError(f'"fps" must be a positive number, got {fps!r}', path)
-        fps = float(fps)
-    size = data.get("size")
-    if size is not None:
-        if (not isinstance(size, list) or len(size) != 2
-                or not all(isinstance(v, int) and v > 0 for v in size)):
-            raise InputError(f'"size" must be [width, height] in pixels, got {size!r}', path)
-        size = (size[0], size[1])
-    return Sidecar(box, fps, size)
-
-
-def write_sidecar(path: str | Path, mouth_box, fps: float | None = None, size=None,
-                  force: bool = False) -> None:
-    """Write a mouth-box sidecar (for renderers and tests); see :func:`read_sidecar`."""
-    box = MouthBox.of(mouth_box)
-    data = {"mouth_box": [box.x, box.y, box.w, box.h]}
-    if fps is not None:
-        data["fps"] = float(fps)
-    if size is not None:
-        data["size"] = [int(size[0]), int(size[1])]
-    with atomic_output(path, force) as tmp:
-        tmp.write_text(json.dumps(data) + "\n", encoding="utf-8")
+# The mouth-box sidecar has one home, visemeface.sidecars; these are its names here.
+from visemeface.sidecars import Sidecar  # noqa: E402,F401
+from visemeface.sidecars import find_video_sidecar as sidecar_path  # noqa: E402,F401
+from visemeface.sidecars import read_video_sidecar as read_sidecar  # noqa: E402,F401
+from visemeface.sidecars import write_video_sidecar as write_sidecar  # noqa: E402,F401

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from visemeface.commands.speak import add_render_arguments, check_early, render_segments
+from visemeface.commands.speak import add_animation_arguments, animate_utterance, check_early
 
 ORDER = 21
 
@@ -13,6 +13,7 @@ EPILOG = """\
 examples:
   visemeface say "one five zero zero six"                        # -> say.mp4
   visemeface say "Hello there." --emotion happiness=0.6 -o hello.mp4
+  visemeface say "[anger 0.8] Bob moves five boats. [happiness] One five zero zero six!" -o tags.mp4
   visemeface say "Hello there." --audio hello.wav -o hello.mp4   # timing stretched to the audio
 """
 
@@ -23,22 +24,23 @@ def register(subparsers) -> None:
         help="animate English text (words -> phonemes -> video)",
         description="Turn English text into phonemes (CMU dictionary, numbers spelled out, a letter-to-sound "
         "fallback for unknown words), time them (--rate, or stretched to --audio) and animate the face. "
-        "Takes every render/export option of `visemeface speak`.",
+        "Takes every option of `visemeface speak` after the transcript.",
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("text", metavar="TEXT", help="what to say (quote it)")
-    p.add_argument("-o", "--output", type=Path, metavar="OUT.mp4", help="video file (default say.mp4)")
     p.add_argument("--rate", type=float, metavar="WPM", default=None,
-                   help="speaking rate in words per minute (ignored with --audio)")
-    add_render_arguments(p)
+                   help="speaking rate in words per minute (not with --audio, which times the text)")
+    add_animation_arguments(p, "say.mp4")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
     from visemeface.errors import InputError
-    from visemeface.speech.g2p import text_to_segments
+    from visemeface.speech.g2p import text_to_utterance
 
     if not args.text.strip():
         raise InputError("nothing to say: the text is empty")
-    out, settings = check_early(args, Path.cwd() / "say.mp4")
-    segments = text_to_segments(args.text, rate_wpm=args.rate, audio=args.audio)
-    return render_segments(segments, args, out, settings)
+    if args.rate is not None and args.audio is not None:
+        raise InputError("--rate and --audio both time the text; give one")
+    sinks, render, physics = check_early(args, Path.cwd() / "say.mp4")
+    utterance = text_to_utterance(args.text, rate_wpm=args.rate, audio=args.audio)
+    return animate_utterance(utterance, args, sinks, render, physics)

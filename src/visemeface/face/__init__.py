@@ -3,9 +3,20 @@
 
 >>> from visemeface.face import default_face, load_face
 >>> face = default_face()              # ~4,500 vertices, metres, origin between the mouth corners
+
+The names are loaded on first use, so importing one submodule does not build the other.
 """
 
-from visemeface.face.mesh import FaceMesh, load_face
-from visemeface.face.procedural import default_face
-
 __all__ = ["FaceMesh", "default_face", "load_face"]
+
+
+def __getattr__(name):
+    if name in ("FaceMesh", "load_face"):
+        from visemeface.face import mesh
+
+        return getattr(mesh, name)
+    if name == "default_face":
+        from visemeface.face.procedural import default_face
+
+        return default_face
+    raise AttributeError(f"module 'visemeface.face' has no attribute {name!r}")

@@ -50,10 +50,7 @@ EYE = np.array([0.90, 0.89, 0.86])
 MESH_SUFFIXES = (".obj", ".ply", ".glb", ".gltf")
 
 
-def sidecar_path(path: str | Path) -> Path:
-    """``face.obj`` -> ``face.landmarks.json`` (same folder)."""
-    path = Path(path)
-    return path.with_name(path.stem + ".landmarks.json")
+from visemeface.sidecars import landmarks_sidecar as sidecar_path  # noqa: E402  (the one rule, re-exported)
 
 
 def split_quads(quads: np.ndarray) -> np.ndarray:

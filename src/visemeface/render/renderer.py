@@ -34,8 +34,7 @@ import numpy as np
 from visemeface.errors import InputError, RenderUnavailable
 from visemeface.face.mesh import FaceMesh, NormalAccumulator
 
-VIEWS = ("face", "mouth", "three-quarter")
-PROJECTIONS = ("perspective", "orthographic")
+from visemeface.render import PROJECTIONS, VIEWS  # noqa: E402  (re-exported)
 BACKGROUND = (0.045, 0.047, 0.06)
 FOV_Y_DEG = 18.0
 THREE_QUARTER_DEG = 35.0

@@ -1,0 +1,175 @@
+"""Option groups shared by the commands that animate (speak, say, simulate) and pose the face.
+
+Each ``add_*`` function adds one group of options to a parser; the matching
+``*_from_args`` function turns the parsed options into the library's own
+objects, checking every value before any work. Choice lists come from the
+library (renderer views, physics kinds, interpolation modes, sinks).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import math
+from pathlib import Path
+
+
+# --------------------------------------------------------------------------- face and rig
+
+def add_face_arguments(p: argparse.ArgumentParser) -> None:
+    """``--face MESH``, ``--landmarks JSON``, ``--rig TOML``."""
+    g = p.add_argument_group("face")
+    g.add_argument("--face", metavar="MESH", help="face mesh (OBJ/PLY/GLB/glTF with a .landmarks.json sidecar); "
+                   "default: the embedded face")
+    g.add_argument("--landmarks", metavar="JSON", help="landmarks sidecar of --face, if not beside it")
+    g.add_argument("--rig", metavar="TOML", help="rig file (default: the shipped data/rig/default.toml)")
+
+
+def build_rig(args):
+    """The rig of ``--face``/``--landmarks``/``--rig`` (default: the embedded face and shipped rig)."""
+    from visemeface.errors import InputError
+    from visemeface.muscles.rig import MuscleRig, default_rig
+
+    if getattr(args, "landmarks", None) and not getattr(args, "face", None):
+        raise InputError("--landmarks needs --face")
+    if getattr(args, "face", None):
+        from visemeface.face.mesh import load_face
+        return MuscleRig.from_file(load_face(args.face, args.landmarks), args.rig)
+    if getattr(args, "rig", None):
+        from visemeface.face.procedural import default_face
+        return MuscleRig.from_file(default_face(), args.rig)
+    return default_rig()
+
+
+# --------------------------------------------------------------------------- rendering
+
+def add_render_arguments(p: argparse.ArgumentParser, view: str = "face") -> None:
+    """``--size``, ``--view``, ``--msaa``."""
+    from visemeface.render import VIEWS
+
+    g = p.add_argument_group("rendering")
+    g.add_argument("--size", type=int, default=512, help="frame width = height in pixels, a multiple of 16 "
+                   "(default 512)")
+    g.add_argument("--view", choices=VIEWS, default=view, help=f"camera (default {view})")
+    g.add_argument("--msaa", type=int, default=4, metavar="N",
+                   help="antialiasing samples per pixel: 0, 2, 4, 8 or 16 (default 4; 0 renders about twice as fast)")
+
+
+def render_from_args(args):
+    from visemeface.pipeline import RenderSettings
+
+    return RenderSettings(size=args.size, view=args.view, msaa=args.msaa).check()
+
+
+# --------------------------------------------------------------------------- outputs
+
+def add_output_arguments(p: argparse.ArgumentParser, video_default: str, resumable: str) -> None:
+    """``-o OUT.mp4``, ``--no-video``, one option per registered sink, ``--resume``, ``--force``, ``-q``."""
+    from visemeface.export import SINKS
+    from visemeface.export.sinks import add_sink_arguments
+
+    p.add_argument("-o", "--output", type=Path, metavar="OUT.mp4", help=f"video file (default {video_default})")
+    g = p.add_argument_group("outputs")
+    g.add_argument("--no-video", action="store_true", help="write no MP4 (only the other outputs)")
+    add_sink_arguments(g, skip=("video",))
+    g.add_argument("--resume", action="store_true", help=resumable)
+    g.add_argument("--force", action="store_true", help="overwrite existing outputs")
+    g.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+    assert "video" in SINKS
+
+
+def sinks_from_args(args, default_video: Path) -> list:
+    """The sinks asked for (the video unless ``--no-video``), every target checked before any work."""
+    from visemeface.errors import InputError
+    from visemeface.export import SINKS
+    from visemeface.export.sinks import check_distinct, sinks_from_args as others
+
+    sinks = []
+    if args.no_video and args.output is not None:
+        raise InputError("-o/--output names a video, but --no-video asks for none")
+    if not args.no_video:
+        sinks.append(SINKS["video"](args.output or default_video, force=args.force))
+    sinks += others(args, force=args.force, skip=("video",), resume=args.resume)
+    if not sinks:
+        raise InputError("nothing to write: --no-video and no other output")
+    check_distinct(sinks)
+    return sinks
+
+
+# --------------------------------------------------------------------------- physics
+
+def add_physics_arguments(p: argparse.ArgumentParser, default: str, choices: tuple[str, ...]) -> argparse._ArgumentGroup:
+    """``--physics`` and the saliva options (their defaults: :class:`PhysicsSettings`')."""
+    g = p.add_argument_group("physics (sticky lips: a finite-element lower face, saliva between the lips)")
+    g.add_argument("--physics", choices=choices, default=default,
+                   help="sticky: the FEM face with saliva that glues the lips until it breaks; elastic: the same "
+                   "FEM without glue" + ("; none: the kinematic rig" if "none" in choices else "")
+                   + " (the FEM costs tens of seconds per simulated second)")
+    g.add_argument("--glue", type=float, metavar="G", help="glue strength K_glue (default 0.08)")
+    g.add_argument("--glue-profile", metavar="SPEC", help="glue across the mouth over --glue, e.g. "
+                   "centre=0.18 or right=0.3,left=0 (WHERE: centre, left, right, corners, all, a..b)")
+    g.add_argument("--moisture", type=float, metavar="M", help="initial saliva moisture 0M (default 100)")
+    g.add_argument("--evaporation", type=float, metavar="E", help="moisture lost per second (default 0)")
+    return g
+
+
+def physics_from_args(args, **more):
+    """:class:`PhysicsSettings` of the options (checked), or None for ``--physics none``."""
+    from visemeface.errors import InputError
+
+    given = [f"--{n.replace('_', '-')}" for n in ("glue", "glue_profile", "moisture", "evaporation")
+             if getattr(args, n, None) is not None]
+    if args.physics == "none":
+        if given:
+            raise InputError(f"{given[0]} needs --physics sticky or elastic")
+        return None
+    from visemeface.physics.drive import PhysicsSettings
+    from visemeface.physics.saliva import SalivaParams
+
+    params = {}
+    if args.moisture is not None:
+        params["initial_moisture"] = args.moisture
+    if args.evaporation is not None:
+        params["evaporation"] = args.evaporation
+    if getattr(args, "critical_moisture", None) is not None:
+        params["critical_moisture"] = args.critical_moisture
+    if args.glue is not None:
+        if not (math.isfinite(args.glue) and args.glue >= 0):
+            raise InputError(f"--glue must be >= 0 and finite, got {args.glue:g}")
+        more["glue"] = args.glue
+    try:
+        saliva = dataclasses.replace(SalivaParams(), **params)
+    except InputError as e:
+        raise InputError(str(e).replace("moisture must", "--moisture must")
+                         .replace("evaporation rate must", "--evaporation must")) from None
+    return PhysicsSettings(glue_profile=args.glue_profile, saliva=saliva, **more)
+
+
+def simulation_of(rig, track, physics: str, settings):
+    """The FEM face of ``rig.face`` driven by ``track`` (every setting checked before any step)."""
+    from visemeface.motion import SimulatedMotion
+    from visemeface.physics.drive import StickySimulation
+    from visemeface.physics.face_model import build_fem_face
+
+    return SimulatedMotion(StickySimulation(build_fem_face(rig.face), rig, track, physics=physics,
+                                            settings=settings))
+
+
+def checkpoint_of(motion, sinks, args):
+    """The checkpoint folder of a resumable motion beside its first output (checked), else None."""
+    if not motion.resumable:
+        return None
+    from visemeface.checkpoint import RunCheckpoint, checkpoint_folder
+
+    ck = RunCheckpoint(checkpoint_folder(sinks[0].targets()[0]), motion.key(), motion.face.n_vertices, motion.fps)
+    ck.check(resume=args.resume, force=args.force)
+    return ck
+
+
+def check_fps_option(fps: float) -> float:
+    from visemeface.errors import InputError
+    from visemeface.track import MAX_FPS
+
+    if not (math.isfinite(fps) and 0 < fps <= MAX_FPS):
+        raise InputError(f"--fps must be in (0, {MAX_FPS:g}], got {fps:g}")
+    return fps

@@ -1,0 +1,179 @@
+"""Sinks: where the frames of a run go, chosen from one registry.
+
+A run (:func:`visemeface.pipeline.run`) streams the frames of a
+:class:`~visemeface.motion.Motion` into a list of sinks. Each output format is
+one module of :mod:`visemeface.export` holding its writer and its sink, which
+registers itself here with :func:`register`; the command line offers every
+registered sink as an option (:func:`add_sink_arguments`), so a new format is
+one new module and touches no command.
+
+The life of a sink
+------------------
+``Sink(path, force=..., **settings)`` checks its target (suffix, no overwrite)
+before any work; :meth:`Sink.open` gets the run's :class:`RunInfo` and stages
+temporaries; :meth:`Sink.write` takes each :class:`~visemeface.motion.Frame`
+(with its rendered ``image`` when the sink :attr:`~Sink.needs_image`);
+:meth:`Sink.close` finishes the temporaries; only when every sink closed
+without error does the run call :meth:`Sink.commit` on each (renames), else
+:meth:`Sink.abort` (removes). So a run writes all of its outputs or none.
+"""
+
+from __future__ import annotations
+
+import argparse
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+
+from visemeface.errors import InputError
+from visemeface.outputs import Staged, check_suffix
+
+#: name -> Sink subclass, in registration order (the order of the CLI options).
+SINKS: dict[str, type[Sink]] = {}
+
+
+@dataclass
+class RunInfo:
+    """What every sink may need to know about the run it is part of.
+
+    Attributes
+    ----------
+    face : FaceMesh
+        The face the frames pose (vertices, triangles, colours).
+    fps : float
+    n_frames : int
+    size : int
+        Rendered frame width = height (px), 0 when nothing is rendered.
+    mouth_box : tuple or None
+        Pixel box (x, y, w, h) of the rest mouth in the rendered frames.
+    audio : Path or None
+        Sound to mux into videos.
+    rig : MuscleRig or None
+        The rig of a speech run (for morph-target exports).
+    track : DataFrame or None
+        The activation track of a speech run.
+    end_time : float or None
+        End of the utterance (s); may lie up to a frame after the last frame.
+    extra : dict
+        Anything else a sink may need (e.g. the physics settings).
+    """
+
+    face: Any
+    fps: float
+    n_frames: int
+    size: int = 0
+    mouth_box: tuple | None = None
+    audio: Path | None = None
+    rig: Any = None
+    track: Any = None
+    end_time: float | None = None
+    extra: dict = field(default_factory=dict)
+
+
+class Sink:
+    """Base class of every output (see the module docstring).
+
+    Class attributes describe the command-line option: ``name`` (registry key
+    and ``--NAME`` option unless ``option`` says otherwise), ``metavar``,
+    ``help``, ``aliases`` (more option strings), ``suffixes`` (accepted file name endings; empty: any) and
+    ``folder`` (the output is a folder). ``needs_image`` asks the run to render
+    each frame.
+    """
+
+    name: ClassVar[str] = ""
+    option: ClassVar[str | None] = None
+    aliases: ClassVar[tuple[str, ...]] = ()
+    metavar: ClassVar[str] = "FILE"
+    help: ClassVar[str] = ""
+    suffixes: ClassVar[tuple[str, ...]] = ()
+    folder: ClassVar[bool] = False
+    needs_image: ClassVar[bool] = False
+
+    def __init__(self, path, force: bool = False, **settings):
+        self.path = Path(path)
+        if self.suffixes:
+            check_suffix(self.path, *self.suffixes)
+        self.force = force
+        self.settings = settings
+        self.staged = [Staged(self.path, force, folder=self.folder)]
+        self.run: RunInfo | None = None
+
+    # ------------------------------------------------------------------ protocol
+    def targets(self) -> list[Path]:
+        """Every path this sink will write (checked for clashes before the run)."""
+        return [s.path for s in self.staged]
+
+    def open(self, run: RunInfo) -> None:
+        """Stage the temporaries; ``run`` says what the run is."""
+        self.run = run
+        self.tmp = [s.open() for s in self.staged]
+
+    def write(self, frame) -> None:
+        """Take one frame (:class:`~visemeface.motion.Frame`)."""
+
+    def cached_image(self, index: int) -> np.ndarray | None:
+        """An already rendered image of frame ``index`` this sink can give back (resume), or None."""
+        return None
+
+    def close(self) -> None:
+        """Finish the temporaries (every frame has been written)."""
+
+    def commit(self) -> list[Path]:
+        """Rename the finished temporaries into place; returns the paths written."""
+        return [s.commit() for s in self.staged]
+
+    def abort(self) -> None:
+        """Remove the temporaries (the run failed or was interrupted)."""
+        for s in self.staged:
+            s.abort()
+
+
+def register(cls: type[Sink]) -> type[Sink]:
+    """Class decorator: add a sink to :data:`SINKS` under ``cls.name``."""
+    if not cls.name or cls.name in SINKS:
+        raise ValueError(f"sink name {cls.name!r} is empty or taken")
+    SINKS[cls.name] = cls
+    return cls
+
+
+def option_of(cls: type[Sink]) -> str:
+    """The command-line option of a sink (``--frames`` ...)."""
+    return cls.option or f"--{cls.name.replace('_', '-')}"
+
+
+def dest_of(cls: type[Sink]) -> str:
+    return option_of(cls).lstrip("-").replace("-", "_")
+
+
+def add_sink_arguments(group: argparse._ActionsContainer, skip: tuple[str, ...] = ()) -> None:
+    """Add one option per registered sink (except ``skip``) to an argparse group."""
+    for name, cls in SINKS.items():
+        if name in skip:
+            continue
+        group.add_argument(option_of(cls), *cls.aliases, dest=dest_of(cls), type=Path, metavar=cls.metavar,
+                           help=cls.help)
+
+
+def sinks_from_args(args, force: bool, skip: tuple[str, ...] = (), **settings) -> list[Sink]:
+    """The sinks the user asked for with :func:`add_sink_arguments`'s options."""
+    out = []
+    for name, cls in SINKS.items():
+        if name in skip:
+            continue
+        path = getattr(args, dest_of(cls), None)
+        if path is not None:
+            out.append(cls(path, force=force, **settings))
+    return out
+
+
+def check_distinct(sinks: list[Sink]) -> None:
+    """Refuse two outputs of one run that are the same path."""
+    seen: dict[Path, str] = {}
+    for s in sinks:
+        for p in s.targets():
+            r = p.resolve()
+            if r in seen:
+                raise InputError(f"the {s.name} and {seen[r]} outputs are the same path", p)
+            seen[r] = s.name
