@@ -24,49 +24,12 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
-import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
-# "one five zero zero six" in DECtalk symbols with durations (s); "_" = pause.
-WORDS = [
-    [("w", 0.08), ("ah", 0.14), ("n", 0.09)],
-    [("f", 0.10), ("ay", 0.18), ("v", 0.08)],
-    [("z", 0.09), ("ir", 0.12), ("ow", 0.15)],
-    [("z", 0.09), ("ir", 0.12), ("ow", 0.15)],
-    [("s", 0.11), ("ih", 0.09), ("k", 0.07), ("s", 0.12)],
-]
-
-
-def write_transcript(path: Path, seconds: float) -> float:
-    """Timed ``start end phone`` lines repeating the digits until ``seconds``; returns the end."""
-    t, lines = 0.0, ["# benchmark: 'one five zero zero six' repeated"]
-    while True:
-        for word in WORDS:
-            for phone, dur in word + [("_", 0.06)]:
-                if t + dur > seconds:
-                    path.write_text("\n".join(lines) + "\n")
-                    return t
-                lines.append(f"{t:.3f} {t + dur:.3f} {phone}")
-                t += dur
-
-
-def child(argv: list[str]) -> None:
-    from visemeface.cli import main
-
-    t0 = time.perf_counter()
-    code = main(argv)
-    wall = time.perf_counter() - t0
-    me = resource.getrusage(resource.RUSAGE_SELF)
-    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
-    print(json.dumps({"code": code, "wall_s": wall, "peak_rss_mb": me.ru_maxrss / 1024,
-                      "ffmpeg_peak_rss_mb": kids.ru_maxrss / 1024,
-                      "cpu_s": me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime,
-                      "load1": os.getloadavg()[0]}))
-
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _runner import child, run_child, write_transcript  # noqa: E402
 
 def run_one(seconds: float, size: int, fps: float, workdir: Path, msaa: int = 4) -> dict:
     transcript = workdir / f"bench_{seconds:g}s.txt"
@@ -74,19 +37,8 @@ def run_one(seconds: float, size: int, fps: float, workdir: Path, msaa: int = 4)
     out = workdir / f"bench_{seconds:g}s.mp4"
     argv = ["speak", str(transcript), "-o", str(out), "--size", str(size), "--fps", str(fps),
             "--msaa", str(msaa), "--force", "-q"]
-    env = dict(os.environ)
-    src = str(Path(__file__).resolve().parents[1] / "src")
-    env["PYTHONPATH"] = src + os.pathsep + env.get("PYTHONPATH", "")
-    t0 = time.perf_counter()
-    proc = subprocess.run([sys.executable, __file__, "--child", json.dumps(argv)],
-                          capture_output=True, text=True, env=env)
-    total = time.perf_counter() - t0
-    if proc.returncode != 0:
-        raise SystemExit(f"speak failed:\n{proc.stderr}")
-    res = json.loads(proc.stdout.strip().splitlines()[-1])
-    if res["code"] != 0:
-        raise SystemExit(f"speak exited {res['code']}:\n{proc.stderr}")
-    from visemeface.render.export import read_video_info
+    res, total = run_child(__file__, argv)
+    from visemeface.export.video import read_video_info
 
     frames = read_video_info(out)["n_frames"]
     return {"bench": "speak", "utterance_s": round(end, 3), "size": size, "fps": fps, "msaa": msaa,

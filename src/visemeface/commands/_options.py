@@ -78,8 +78,11 @@ def add_output_arguments(p: argparse.ArgumentParser, video_default: str, resumab
     assert "video" in SINKS
 
 
-def sinks_from_args(args, default_video: Path) -> list:
-    """The sinks asked for (the video unless ``--no-video``), every target checked before any work."""
+def sinks_from_args(args, default_video: Path, defaults: dict | None = None) -> list:
+    """The sinks asked for (the video unless ``--no-video``), every target checked before any work.
+
+    ``defaults`` (sink name -> path) adds sinks the command writes unless told otherwise.
+    """
     from visemeface.errors import InputError
     from visemeface.export import SINKS
     from visemeface.export.sinks import check_distinct, sinks_from_args as others
@@ -90,6 +93,9 @@ def sinks_from_args(args, default_video: Path) -> list:
     if not args.no_video:
         sinks.append(SINKS["video"](args.output or default_video, force=args.force))
     sinks += others(args, force=args.force, skip=("video",), resume=args.resume)
+    for name, path in (defaults or {}).items():
+        if not any(s.name == name for s in sinks):
+            sinks.append(SINKS[name](path, force=args.force))
     if not sinks:
         raise InputError("nothing to write: --no-video and no other output")
     check_distinct(sinks)

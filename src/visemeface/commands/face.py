@@ -20,11 +20,13 @@ def register(subparsers) -> None:
     )
     p.add_argument("-o", "--output", metavar="PNG", help="PNG image to write")
     p.add_argument("--export", metavar="MESH", help="write the mesh (.obj/.ply/.glb/.gltf) and its landmarks file")
-    p.add_argument("--view", default="face", choices=["face", "mouth", "three-quarter"],
+    from visemeface.render import PROJECTIONS, VIEWS
+
+    p.add_argument("--view", default="face", choices=VIEWS,
                    help="camera preset (default: face)")
     p.add_argument("--size", default="512", metavar="N|WxH",
                    help="image size in pixels, multiples of 16 (default: 512)")
-    p.add_argument("--projection", default="perspective", choices=["perspective", "orthographic"],
+    p.add_argument("--projection", default="perspective", choices=PROJECTIONS,
                    help="camera projection (default: perspective)")
     p.add_argument("--resolution", type=int, metavar="N",
                    help="approximate vertex count of the embedded face (default: about 4,500)")

@@ -28,7 +28,9 @@ def register(subparsers) -> None:
                    help="set one muscle's activation (repeatable; after the posture and emotions)")
     p.add_argument("--emotion", dest="emotions", action="append", default=[], metavar="NAME=W",
                    help="blend an emotion with weight W (repeatable), e.g. happiness=0.6")
-    p.add_argument("--view", default="face", choices=["face", "mouth", "three-quarter"], help="camera (default face)")
+    from visemeface.render import VIEWS
+
+    p.add_argument("--view", default="face", choices=VIEWS, help="camera (default face)")
     p.add_argument("--size", default="512", metavar="W[xH]", help="image size in pixels, multiples of 16 (default 512)")
     p.add_argument("--rig", metavar="TOML", help="rig file (default: the shipped data/rig/default.toml)")
     p.add_argument("--face", metavar="MESH", help="face mesh (OBJ/PLY/GLB/glTF with a .landmarks.json sidecar); "
@@ -57,19 +59,6 @@ def parse_assignments(items, option: str) -> dict[str, float]:
         except ValueError:
             raise InputError(f"{option} {name}: value {value!r} is not a number") from None
     return out
-
-
-def build_rig(args):
-    """The rig of ``--face``/``--rig`` (default face and rig file)."""
-    from visemeface.muscles.rig import MuscleRig, default_rig
-
-    if args.face:
-        from visemeface.face.mesh import load_face
-        return MuscleRig.from_file(load_face(args.face, args.landmarks), args.rig)
-    if args.rig:
-        from visemeface.face.procedural import default_face
-        return MuscleRig.from_file(default_face(), args.rig)
-    return default_rig()
 
 
 def activations(rig, posture, emotions: dict, sets: dict):
@@ -104,6 +93,8 @@ def run(args) -> int:
     size = parse_size(args.size)
     sets = parse_assignments(args.sets, "--set")
     emotions = parse_assignments(args.emotions, "--emotion")
+    from visemeface.commands._options import build_rig
+
     rig = build_rig(args)
     a = activations(rig, args.posture, emotions, sets)
     vertices = rig.pose(a)

@@ -6,7 +6,7 @@ import numpy as np
 
 ORDER = 43
 
-VIEWS = ("face", "mouth", "three-quarter")
+from visemeface.render import VIEWS
 
 
 def register(subparsers) -> None:

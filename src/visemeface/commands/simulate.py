@@ -86,9 +86,7 @@ def run(args) -> int:
 
     _check(args)
     stem = (args.output or Path(f"{args.scenario}.mp4")).with_suffix("")
-    if args.measures is None:
-        args.measures = Path(f"{stem}.saliva.csv")
-    sinks = opt.sinks_from_args(args, Path(f"{args.scenario}.mp4"))
+    sinks = opt.sinks_from_args(args, Path(f"{args.scenario}.mp4"), defaults={"measures": Path(f"{stem}.saliva.csv")})
     render = opt.render_from_args(args)
     physics = opt.physics_from_args(args, dt=args.dt, damping=args.damping,
                                     glue_file=None if args.glue_file is None else str(args.glue_file))

@@ -26,8 +26,9 @@ line and column.
 
 from __future__ import annotations
 
+import functools
+
 import math
-import weakref
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
@@ -40,7 +41,7 @@ from visemeface.muscles.rig import SPEECH_FUNCTIONS  # seed 002 Table 1, re-expo
 from visemeface.resources import data_path
 
 __all__ = [
-    "EMOTIONS", "SPEECH_FUNCTIONS", "TARGET_DIMENSIONS", "blend", "expression_info", "keep_lip_contact", "expressions_file",
+    "EMOTIONS", "PostureLibrary", "default_library", "SPEECH_FUNCTIONS", "TARGET_DIMENSIONS", "blend", "expression_info", "keep_lip_contact", "expressions_file",
     "load_expressions", "load_targets", "load_visemes", "parse_weights", "posed_vertices", "targets_file",
     "viseme_info", "visemes_file",
 ]
@@ -289,25 +290,54 @@ def expression_info(path: str | Path | None = None) -> pd.DataFrame:
     return df[["emotion", "action_units"]].set_index("emotion")
 
 
-_TABLES: dict[int, tuple] = {}
+class PostureLibrary:
+    """The viseme and emotion tables validated against one rig, with a lip gauge on its face.
 
+    Made once and passed around (loading and validating the tables costs milliseconds;
+    blending a posture microseconds). :func:`blend` and :func:`posed_vertices` use the
+    default rig's library when given no library.
 
-def _tables(rig) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """Shipped tables validated against ``rig``, loaded once per rig object.
-
-    Keyed by object identity (rigs compare equal to each other); the entry is
-    dropped when the rig is garbage-collected.
+    Parameters
+    ----------
+    rig : MuscleRig, optional
+        Default: the shared default rig.
+    visemes, expressions : DataFrame, optional
+        Tables to use instead of the shipped ones (as the loaders return them).
     """
-    hit = _TABLES.get(id(rig))
-    if hit is not None and hit[0]() is rig:
-        return hit[1]
-    tables = (load_visemes(rig=rig), load_expressions(rig=rig))
-    try:
-        ref = weakref.ref(rig, lambda _r, key=id(rig): _TABLES.pop(key, None))
-    except TypeError:  # not weak-referenceable: no cache
-        return tables
-    _TABLES[id(rig)] = (ref, tables)
-    return tables
+
+    def __init__(self, rig=None, visemes: pd.DataFrame | None = None, expressions: pd.DataFrame | None = None):
+        from visemeface.muscles.measure import LipGauge
+
+        self.rig = _default_rig() if rig is None else rig
+        self.visemes = load_visemes(rig=self.rig) if visemes is None else visemes
+        self.expressions = load_expressions(rig=self.rig) if expressions is None else expressions
+        self.gauge = LipGauge(self.rig.face)
+
+    def blend(self, viseme: str, emotions: Mapping[str, float] | None = None, w_viseme: float = 1.0,
+              keep_contact: bool = False) -> pd.Series:
+        """:func:`blend` with this library's rig and tables."""
+        return blend(viseme, emotions, w_viseme, library=self, keep_contact=keep_contact)
+
+    def posed_vertices(self, viseme: str, emotions: Mapping[str, float] | None = None, w_viseme: float = 1.0,
+                       keep_contact: bool = False) -> np.ndarray:
+        """The rig's face posed at :meth:`blend`: (N, 3) vertices."""
+        return np.asarray(self.rig.pose(self.blend(viseme, emotions, w_viseme, keep_contact).to_numpy()))
+
+    def opening(self, a) -> float:
+        """Lip opening (change from rest, in rest mouth widths) of activations ``a``."""
+        return float(self.gauge.changes(self.rig.pose(np.asarray(a, dtype=float)))["opening_height"])
+
+
+@functools.lru_cache(maxsize=1)
+def default_library() -> PostureLibrary:
+    """The shipped tables on the shared default rig (built once)."""
+    return PostureLibrary()
+
+
+def _library(rig) -> PostureLibrary:
+    from visemeface.muscles.rig import default_rig
+
+    return default_library() if rig is None or rig is default_rig() else PostureLibrary(rig)
 
 
 # --------------------------------------------------------------------------- blending
@@ -350,7 +380,7 @@ def parse_weights(specs: Iterable[str] | str | None) -> dict[str, float]:
 
 def blend(viseme: str, emotions: Mapping[str, float] | None = None, w_viseme: float = 1.0, rig=None,
           *, visemes: pd.DataFrame | None = None, expressions: pd.DataFrame | None = None,
-          keep_contact: bool = False) -> pd.Series:
+          keep_contact: bool = False, library: PostureLibrary | None = None) -> pd.Series:
     """Expressive speech posture by weighted parameter blending (seed 002 §2.2.1).
 
     .. math::
@@ -369,6 +399,9 @@ def blend(viseme: str, emotions: Mapping[str, float] | None = None, w_viseme: fl
         Gives the function names and ranges (default rig if None).
     visemes, expressions : DataFrame, optional
         Tables to use instead of the shipped ones (as returned by the loaders).
+    library : PostureLibrary, optional
+        Rig, tables and lip gauge loaded once (instead of ``rig``); pass one when
+        blending many postures on your own rig.
     keep_contact : bool
         For postures whose articulation needs lip contact (bilabials p b m,
         labiodentals f v), close the jaw after blending until the lip opening is
@@ -392,13 +425,12 @@ def blend(viseme: str, emotions: Mapping[str, float] | None = None, w_viseme: fl
     >>> a["zygomatic_major_left"]                    # doctest: +SKIP
     0.54
     """
-    if rig is None:
-        rig = _default_rig()
+    if library is None:
+        library = _library(rig)
+    rig = library.rig
     names, ranges = _rig_spec(rig)
-    if visemes is None or expressions is None:
-        default_v, default_e = _tables(rig)
-        visemes = default_v if visemes is None else visemes
-        expressions = default_e if expressions is None else expressions
+    visemes = library.visemes if visemes is None else visemes
+    expressions = library.expressions if expressions is None else expressions
     viseme = str(viseme).strip()
     if viseme not in visemes.index and viseme.lower() in visemes.index:
         viseme = viseme.lower()           # DECtalk symbols are lower case; "AA" means /aa/
@@ -416,7 +448,7 @@ def blend(viseme: str, emotions: Mapping[str, float] | None = None, w_viseme: fl
     if keep_contact and viseme in _contact_postures() and emotions and w_v > 0:
         alone = np.clip(w_v * visemes.loc[viseme].reindex(list(names), fill_value=0.0).to_numpy(dtype=float),
                         ranges[:, 0], ranges[:, 1])
-        out = keep_lip_contact(rig, out, _opening(rig, alone))
+        out = keep_lip_contact(rig, out, library.opening(alone), library=library)
     return out
 
 
@@ -426,24 +458,8 @@ def _contact_postures() -> tuple[str, ...]:
     return tuple(CLOSURE) + tuple(LABIODENTAL)
 
 
-def _gauge(rig):
-    from visemeface.muscles.measure import LipGauge
-
-    g = getattr(rig, "_library_lip_gauge", None)
-    if g is None:
-        g = LipGauge(rig.face)
-        try:
-            object.__setattr__(rig, "_library_lip_gauge", g)
-        except (AttributeError, TypeError):
-            pass
-    return g
-
-
-def _opening(rig, a) -> float:
-    return float(_gauge(rig).changes(rig.pose(np.asarray(a, dtype=float)))["opening_height"])
-
-
-def keep_lip_contact(rig, activations: pd.Series, opening: float, tol: float = 1e-4) -> pd.Series:
+def keep_lip_contact(rig, activations: pd.Series, opening: float, tol: float = 1e-4,
+                     library: PostureLibrary | None = None) -> pd.Series:
     r"""Close the jaw until the lip opening is at most ``opening``.
 
     The lip opening :math:`h(j)` (change from rest, in rest mouth widths) grows
@@ -462,12 +478,15 @@ def keep_lip_contact(rig, activations: pd.Series, opening: float, tol: float = 1
         Largest lip opening allowed (e.g. the bare viseme's).
     tol : float
         Bisection stops when the jaw interval is shorter than this.
+    library : PostureLibrary, optional
+        Its lip gauge measures the opening (default: one for ``rig``).
 
     Returns
     -------
     Series
         A copy of ``activations`` with the ``jaw`` entry lowered where needed.
     """
+    library = library if library is not None and library.rig is rig else _library(rig)
     a = activations.astype(float).copy()
     j = rig.names.index("jaw")
     lo, hi = float(rig.ranges[j, 0]), float(a.iloc[j])
@@ -475,7 +494,7 @@ def keep_lip_contact(rig, activations: pd.Series, opening: float, tol: float = 1
     def h(jaw):
         b = a.to_numpy().copy()
         b[j] = jaw
-        return _opening(rig, b)
+        return library.opening(b)
 
     if h(hi) <= opening + 1e-9:
         return a
@@ -492,5 +511,4 @@ def keep_lip_contact(rig, activations: pd.Series, opening: float, tol: float = 1
 def posed_vertices(rig, viseme: str, emotions: Mapping[str, float] | None = None,
                    w_viseme: float = 1.0, keep_contact: bool = False) -> np.ndarray:
     """The rig's face posed at ``blend(viseme, emotions, w_viseme, keep_contact=...)``: (N, 3) vertices."""
-    a = blend(viseme, emotions, w_viseme, rig=rig, keep_contact=keep_contact)
-    return np.asarray(rig.pose(a.to_numpy()))
+    return _library(rig).posed_vertices(viseme, emotions, w_viseme, keep_contact)

@@ -73,6 +73,7 @@ import numpy as np
 import pandas as pd
 
 from visemeface.errors import InputError, choose, close_matches
+from visemeface.numeric import cosine_step
 from visemeface.postures.phonemes import CLOSURE, DECTALK, LABIODENTAL
 from visemeface.resources import data_path
 from visemeface.track import check_fps, frame_count, frame_times, load_track, make_track, save_track
@@ -182,7 +183,7 @@ def _keyed(times, start, end, targets, edge, ease):
     u = np.clip((times - t0) / span, 0.0, 1.0)
     u = np.where(t1 > t0, u, 1.0)
     if ease:
-        u = (1 - np.cos(np.pi * u)) / 2
+        u = cosine_step(u)
     out[:] = key_v[j] * (1 - u)[:, None] + key_v[j + 1] * u[:, None]
     return out
 
@@ -230,7 +231,7 @@ def _force_contacts(values, times, start, end, phones, targets, fps, edge):
         ramp_t = np.where(before, ramp_b, ramp_a)
         d = np.abs(rel)
         u = np.clip((d - hold_t) / np.where(ramp_t > 0, ramp_t, 1.0), 0.0, 1.0)
-        w = np.where(d <= hold_t, 1.0, np.where(ramp_t > 0, (1 + np.cos(np.pi * u)) / 2, 0.0))
+        w = np.where(d <= hold_t, 1.0, np.where(ramp_t > 0, 1.0 - cosine_step(u), 0.0))
         values[lo:hi] = values[lo:hi] * (1 - w)[:, None] + targets[s][None, :] * w[:, None]
         strength[lo:hi] = np.maximum(strength[lo:hi], w)
     return values, strength
@@ -303,8 +304,7 @@ def emotion_weights(times: np.ndarray, names: list[str], base: Mapping[str, floa
             delta = target - level[idx]
             level[idx] = target
             if ramp > 0:
-                u = np.clip((times - tau) / ramp + 0.5, 0.0, 1.0)
-                step = (1 - np.cos(np.pi * u)) / 2
+                step = cosine_step((times - tau) / ramp + 0.5)
             else:
                 step = (times >= tau).astype(float)
             out[:, idx] += step[:, None] * delta[None, :]
