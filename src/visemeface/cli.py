@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import re
 import pkgutil
 import signal
 import sys
@@ -28,8 +29,29 @@ def _command_modules():
     return sorted(mods, key=lambda m: (getattr(m, "ORDER", 100), m.__name__))
 
 
+class UsageError(VisemefaceError):
+    """A command line argparse refuses (unknown option, missing or malformed value)."""
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse with the project's error convention: one line, ``visemeface: error:``, exit 2.
+
+    Values that start with a minus sign and a digit (``--box -10,-10,50,20``,
+    ``--glue -0.1``) are values, not options: no option of ours looks like a number.
+    """
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(r"^-\.?\d")
+
+    def error(self, message):
+        command = self.prog.removeprefix("visemeface").strip()
+        where = f"{command}: " if command else ""
+        raise UsageError(f"{where}{message} (see `{self.prog} --help`)")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="visemeface",
         description="Expressive visual-speech synthesis: Waters muscle functions, visemes and emotions, "
         "coarticulated speech animation and a physically-based sticky-lip face.",
@@ -49,7 +71,11 @@ def _show_warning(message, category, filename, lineno, file=None, line=None):
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except UsageError as exc:
+        print(f"visemeface: error: {exc}", file=sys.stderr)
+        return 2
     if not getattr(args, "func", None):
         parser.print_help()
         return 0

@@ -42,7 +42,7 @@ def check_new(path: str | Path, force: bool = False, folder: bool | None = None)
     path = Path(path)
     if path.exists() or path.is_symlink():
         if not force:
-            raise InputError("output exists; use --force to overwrite", path)
+            raise InputError("output exists; use --force to overwrite (force=True in Python)", path)
         if folder is False and path.is_dir():
             raise InputError("output exists and is a folder, not a file", path)
         if folder is True and not path.is_dir():
@@ -67,6 +67,14 @@ def check_suffix(path: str | Path, *suffixes: str) -> Path:
 
 def _temporary_name(path: Path, pid: int | None = None) -> Path:
     return path.with_name(f".{path.name}.vf{os.getpid() if pid is None else pid}~{path.suffix}")
+
+
+_TEMPORARY = re.compile(r"^\..+\.vf\d+~")
+
+
+def is_temporary(path: str | Path) -> bool:
+    """True for a staged temporary of ours (``.<name>.vf<pid>~<suffix>``)."""
+    return _TEMPORARY.match(Path(path).name) is not None
 
 
 def _pid_alive(pid: int) -> bool:
@@ -150,6 +158,11 @@ class Staged:
 
 @contextlib.contextmanager
 def _staged(path, force: bool, folder: bool) -> Iterator[Path]:
+    if is_temporary(path):
+        # Already a staged temporary (a sink handing its temporary to a writer): write it in place,
+        # so no temporary of a temporary exists that the next run could not recognise.
+        yield Path(path)
+        return
     out = Staged(path, force, folder)
     tmp = out.open()
     try:

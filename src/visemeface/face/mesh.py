@@ -22,7 +22,9 @@ triangles give its quads back; a user's mesh without them loads with no quads.
 
 from __future__ import annotations
 
+import io
 import json
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -148,6 +150,8 @@ class FaceMesh:
     regions: dict = field(default_factory=dict)
     landmarks: dict = field(default_factory=dict)
     colors: np.ndarray | None = None
+    #: Where the landmarks came from (a ``.landmarks.json``), named in errors; None for a built face.
+    landmarks_file: str | None = None
 
     def __post_init__(self):
         self.vertices = np.ascontiguousarray(self.vertices, dtype=np.float64).reshape(-1, 3)
@@ -278,6 +282,23 @@ class FaceMesh:
         return path, side
 
 
+def _obj_text(path: Path) -> str:
+    """An OBJ's text: UTF-8, else Latin-1 (comments in old files); refuses what is no OBJ at all.
+
+    Decoded here because trimesh guesses an unknown encoding with an optional package.
+    """
+    raw = path.read_bytes()
+    if b"\0" in raw[:4096]:
+        raise InputError("not a valid OBJ (binary data)", path)
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        text = raw.decode("latin-1")
+    if not re.search(r"^\s*v\s", text, re.M):
+        raise InputError("not a valid OBJ (no vertex lines 'v x y z')", path)
+    return text
+
+
 def _read_surface(path: Path):
     """(vertices, triangles, colours or None) from a mesh file via trimesh."""
     import trimesh
@@ -286,9 +307,13 @@ def _read_surface(path: Path):
     if path.suffix.lower() not in MESH_SUFFIXES:
         raise InputError(f"unknown mesh format {path.suffix!r} (use one of {', '.join(MESH_SUFFIXES)})",
                          path)
+    source = _obj_text(path) if path.suffix.lower() == ".obj" else None
     try:
-        loaded = trimesh.load(path, process=False, maintain_order=True,
-                              skip_materials=True)
+        if source is not None:
+            loaded = trimesh.load(io.StringIO(source), file_type="obj", process=False, maintain_order=True,
+                                  skip_materials=True)
+        else:
+            loaded = trimesh.load(path, process=False, maintain_order=True, skip_materials=True)
         if isinstance(loaded, trimesh.Scene):
             if not any(isinstance(g, trimesh.Trimesh) for g in loaded.geometry.values()):
                 raise ValueError("no triangle mesh in the scene")
@@ -408,7 +433,7 @@ def load_face(path: str | Path, landmarks_path: str | Path | None = None) -> Fac
             quads = None
     if quads is None:
         quads = np.zeros((0, 4), np.int64)
-    return FaceMesh(vertices, quads, tris, regions, landmarks, colours)
+    return FaceMesh(vertices, quads, tris, regions, landmarks, colours, landmarks_file=str(side))
 
 
 def _canon(tris: np.ndarray) -> np.ndarray:

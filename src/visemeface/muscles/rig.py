@@ -432,7 +432,8 @@ class MuscleRig:
         path = Path(path) if path is not None else data_path("rig", "default.toml")
         for name in ("mouth_corner_left", "mouth_corner_right", "nasion", "chin"):
             if name not in face.landmarks:
-                raise InputError(f"the face has no landmark {name!r}, needed to place the rig", path)
+                raise InputError(f"no landmark {name!r}; the rig places its muscles by it (add it to the face's "
+                                 "landmarks)", getattr(face, "landmarks_file", None) or "the face")
         frame = mouth_frame(face)
         reader = _RigFileReader(path, face, frame)
         muscles = _muscles_from(reader)

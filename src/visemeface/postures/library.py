@@ -118,15 +118,17 @@ def parse_weights(specs: Iterable[str] | str | None) -> dict[str, float]:
         specs = [specs]
     out: dict[str, float] = {}
     for spec in specs:
-        for part in str(spec).split(","):
-            part = part.strip()
-            if not part:
-                continue
-            name, _, value = part.partition("=")
+        parts = [p.strip() for p in str(spec).split(",")]
+        if not any(parts):
+            raise InputError(f"empty weight {spec!r}: expected NAME or NAME=WEIGHT")
+        for part in filter(None, parts):
+            name, sep, value = part.partition("=")
             name = name.strip()
             if not name:
                 raise InputError(f"bad weight {part!r}: expected NAME=WEIGHT")
-            out[name] = out.get(name, 0.0) + _weight(name, value.strip() if value else 1.0)
+            if sep and not value.strip():
+                raise InputError(f"bad weight {part!r}: a number must follow '='")
+            out[name] = out.get(name, 0.0) + _weight(name, value.strip() if sep else 1.0)
     return out
 
 

@@ -56,6 +56,8 @@ FORMATS = tuple(PARSERS) + ("text",)
 _ALIASES = {"htk": "lab", "hts": "lab", "xwaves": "lab", "esps": "lab", "timit": "phn",
             "praat": "textgrid", "json": "mfa-json", "mfa_json": "mfa-json", "csv": "mfa-csv",
             "mfa_csv": "mfa-csv", "plain": "text", "txt": "timed"}
+#: Formats with several tiers, among which ``tier=`` chooses.
+TIERED = ("textgrid", "mfa-json", "mfa-csv")
 #: A transcript whose median phone lasts longer than this (s) has wrong time units or format:
 #: speech phones last 0.03-0.3 s and even a sung vowel rarely 5 s, while TIMIT samples read as
 #: HTK units (or the reverse) are off by a factor of 625.
@@ -114,11 +116,14 @@ def parse_utterance(text: str, fmt: str | None = None, tier: str | None = None, 
     where = path if path is not None else "<transcript>"
     text = text.lstrip("\ufeff")
     fmt = detect_format(text, path) if fmt is None else choose(fmt, FORMATS, "transcript format", _ALIASES)
+    if tier is not None and fmt not in TIERED:
+        raise InputError(f"--tier applies to {', '.join(TIERED)} transcripts, not to the {fmt} format", where)
     if fmt == "text":
         from visemeface.speech.g2p import text_to_utterance
         return text_to_utterance(text, rate_wpm=rate_wpm, audio=audio, path=where)
     if rate_wpm is not None:
         raise InputError(f"--rate applies to plain text only; this transcript is timed ({fmt} format)", where)
+
     if not math.isfinite(float(sample_rate)) or float(sample_rate) <= 0:
         raise InputError(f"sample rate must be positive, got {sample_rate!r}")
     reader = PARSERS[fmt]

@@ -1,0 +1,114 @@
+"""Every option of every sub-command, given an invalid value: exit 2, one line, nothing written, fast.
+
+The cases are generated from the argparse parsers, so a new option or command is covered the day
+it is added: a value-taking option gets a value of the wrong kind or out of every sensible range
+(``nan``, ``-1e308``, ``-7``, a choice that does not exist, a path in a folder that does not exist).
+"""
+
+import time
+
+import numpy as np
+import pytest
+
+from visemeface.cli import build_parser, main
+
+TINY = "0.00 0.05 _\n0.05 0.25 aa\n0.25 0.30 _\n"
+
+#: A valid invocation of each command (the option under test is added to it, or replaces its value).
+BASE = {
+    "face": ["-o", "f.png"],
+    "pose": ["aa", "-o", "p.png"],
+    "speak": ["t.txt"],
+    "say": ["hi"],
+    "muscles": [],
+    "visemes": [],
+    "emotions": [],
+    "sheet": ["-o", "s.png"],
+    "simulate": ["part"],
+    "analyze": ["frames", "--box", "2,4,12,6", "-o", "a.csv"],
+    "compare": ["p1.csv", "p2.csv"],
+}
+#: Options that take no invalid value, with the reason.
+FREE = {}
+
+
+def _commands():
+    sub = build_parser()._subparsers._group_actions[0]
+    return sub.choices
+
+
+def _bad_values(action):
+    if action.choices:
+        return ["zz-not-a-choice"]
+    kind = getattr(action.type, "__name__", None)
+    if kind == "int":
+        return ["x", "-7"]
+    if kind == "float":
+        return ["nan", "-1e308"]
+    return ["/nonexistent-folder/x.bad"]
+
+
+def _cases():
+    for name, parser in _commands().items():
+        assert name in BASE, f"add a valid invocation of `{name}` to BASE"
+        for action in parser._actions:
+            if not action.option_strings or action.nargs == 0 or action.dest == "help":
+                continue
+            option = action.option_strings[-1]
+            if (name, option) in FREE:
+                continue
+            for value in _bad_values(action):
+                yield pytest.param(name, option, value, id=f"{name} {option} {value}")
+
+
+@pytest.fixture(scope="module")
+def prepared(tmp_path_factory):
+    import pandas as pd
+
+    from visemeface.export.images import write_png
+
+    root = tmp_path_factory.mktemp("inputs")
+    (root / "t.txt").write_text(TINY)
+    (root / "frames").mkdir()
+    for i in range(3):
+        write_png(root / "frames" / f"f{i}.png", np.full((16, 16, 3), 200, np.uint8))
+    profile = pd.DataFrame({"frame": [0, 1, 2], "time": [0.0, 0.04, 0.08], "count": [0, 1, 1],
+                            "area": [0.0, 0.1, 0.2], "width": [0.0, 0.5, 0.6], "height": [0.0, 0.1, 0.2]})
+    profile.to_csv(root / "p1.csv", index=False)
+    profile.to_csv(root / "p2.csv", index=False)
+    return root
+
+
+@pytest.fixture
+def inputs(prepared, tmp_path):
+    """A fresh copy of the inputs for each case (a case that wrongly succeeds cannot spoil the next)."""
+    import shutil
+
+    shutil.copytree(prepared, tmp_path / "in")
+    return tmp_path / "in"
+
+
+def _listing(folder):
+    return sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*"))
+
+
+@pytest.mark.parametrize("command,option,value", list(_cases()))
+def test_an_invalid_option_value_is_one_line_exit_2_and_writes_nothing(inputs, monkeypatch, capsys, command,
+                                                                      option, value):
+    monkeypatch.chdir(inputs)
+    before = _listing(inputs)
+    argv = list(BASE[command])
+    if option in argv:
+        argv[argv.index(option) + 1] = value
+    else:
+        argv += [f"{option}={value}"]
+    t0 = time.perf_counter()
+    code = main([command] + argv)
+    elapsed = time.perf_counter() - t0
+    err = capsys.readouterr().err
+    assert code == 2, f"exit {code}: {err}"
+    lines = [ln for ln in err.splitlines() if not ln.startswith("visemeface: warning:")]
+    assert len(lines) == 1 and lines[0].startswith("visemeface: error: "), err
+    assert "np.float64" not in err and "Traceback" not in err and not any(len(w) > 40 for w in err.split())
+    assert _listing(inputs) == before
+    assert elapsed < 3.0, f"{elapsed:.1f} s before refusing"

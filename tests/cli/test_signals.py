@@ -1,0 +1,90 @@
+"""Real processes and real signals: simulate never hangs, Ctrl-C ends it promptly, kills leave nothing stale.
+
+These run ``visemeface simulate`` as a separate process on a coarse face (800 vertices, 16 frames).
+"""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from visemeface.export.pc2 import read_pc2
+
+pytestmark = pytest.mark.slow
+
+SIM = ["simulate", "part", "--resolution", "800", "--fps", "20", "--size", "32", "--msaa", "0", "-q"]
+
+
+def _start(work, tag, *more):
+    argv = [sys.executable, "-m", "visemeface", *SIM, "-o", f"{tag}.mp4", "--frames", f"{tag}_fr",
+            "--pc2", f"{tag}.pc2", *more]
+    return subprocess.Popen(argv, cwd=work, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _wait_for_a_frame(work, tag, proc, timeout=120):
+    """Wait until the run has finished a frame (its checkpoint records it): the simulation is running."""
+    vertices = work / f"{tag}.mp4.checkpoint" / "vertices.f32"
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout:
+        if proc.poll() is not None:
+            raise AssertionError(f"finished early: {proc.communicate()}")
+        if vertices.exists() and vertices.stat().st_size > 0:
+            return
+        time.sleep(0.05)
+    raise AssertionError("no frame finished in time")
+
+
+def test_simulate_with_every_output_finishes_every_time(tmp_path):
+    """Starting the video encoder after numba's thread pool once hung 1 run in 3 (TBB's fork handler)."""
+    for k in range(5):
+        proc = _start(tmp_path, f"run{k}")
+        try:
+            out, err = proc.communicate(timeout=240)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            raise AssertionError(f"run {k} hung")
+        assert proc.returncode == 0, err
+    a = read_pc2(tmp_path / "run0.pc2")[0]
+    for k in range(1, 5):
+        np.testing.assert_array_equal(a, read_pc2(tmp_path / f"run{k}.pc2")[0])   # deterministic too
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_an_interrupt_ends_simulate_within_two_seconds_and_resume_completes(tmp_path, sig):
+    proc = _start(tmp_path, "cut")
+    _wait_for_a_frame(tmp_path, "cut", proc)
+    t0 = time.monotonic()
+    proc.send_signal(sig)
+    try:
+        _, err = proc.communicate(timeout=10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        raise AssertionError("did not end within 10 s of the signal")
+    assert time.monotonic() - t0 < 2.0, f"{time.monotonic() - t0:.1f} s to stop"
+    assert proc.returncode == 130 and "interrupted" in err
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert names == ["cut.mp4.checkpoint", "cut_fr.partial"]        # no output under its final name, no temporary
+    proc = _start(tmp_path, "cut", "--resume")
+    _, err = proc.communicate(timeout=240)
+    assert proc.returncode == 0, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cut.mp4", "cut.mp4.json", "cut.pc2", "cut.saliva.csv",
+                                                          "cut_fr", "cut_fr.json"]
+
+
+def test_after_a_kill_the_next_run_resumes_and_removes_what_the_killed_one_left(tmp_path):
+    proc = _start(tmp_path, "k")
+    _wait_for_a_frame(tmp_path, "k", proc)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=10)
+    stale = [p.name for p in tmp_path.iterdir() if p.name.startswith(".")]
+    assert stale, "a killed run leaves its temporaries (it cannot remove them itself)"
+    proc = _start(tmp_path, "k", "--resume")
+    _, err = proc.communicate(timeout=240)
+    assert proc.returncode == 0, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["k.mp4", "k.mp4.json", "k.pc2", "k.saliva.csv",
+                                                          "k_fr", "k_fr.json"]
+    assert not any(p.name.startswith(".") for p in (tmp_path / "k_fr").iterdir() if p.name != ".visemeface-frames.json")
