@@ -179,3 +179,28 @@ def check_fps_option(fps: float) -> float:
     if not (math.isfinite(fps) and 0 < fps <= MAX_FPS):
         raise InputError(f"--fps must be in (0, {MAX_FPS:g}], got {fps:g}")
     return fps
+
+
+# --------------------------------------------------------------------------- listings
+
+def print_table(head: tuple[str, ...], rows: list[tuple], as_csv: bool = False, width: int = 110) -> None:
+    """Rows as CSV, or as aligned columns with the last one wrapped to ``width`` characters."""
+    import sys
+    import textwrap
+
+    rows = [tuple(str(c) for c in r) for r in rows]
+    if as_csv:
+        import csv
+
+        w = csv.writer(sys.stdout, lineterminator="\n")
+        w.writerow(head)
+        w.writerows(rows)
+        return
+    widths = [max(len(r[i]) for r in rows + [head]) for i in range(len(head) - 1)]
+    indent = sum(widths) + 2 * len(widths)
+    print("  ".join(h.ljust(w) for h, w in zip(head, widths + [0])).rstrip())
+    for r in rows:
+        last = textwrap.wrap(r[-1], width=max(30, width - indent)) or [""]
+        print("  ".join(c.ljust(w) for c, w in zip(r[:-1], widths)) + "  " + last[0])
+        for more in last[1:]:
+            print(" " * indent + more)

@@ -24,25 +24,19 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    import sys
+    from visemeface.commands._options import build_rig, print_table
+    from visemeface.muscles.rig import SPEECH_FUNCTIONS
 
-    from visemeface.muscles.rig import SPEECH_FUNCTIONS, MuscleRig, default_rig
-
-    if args.rig:
-        from visemeface.face.procedural import default_face
-        rig = MuscleRig.from_file(default_face(), args.rig)
-    else:
-        rig = default_rig()
+    rig = build_rig(args)
     table = rig.table()
     table["speech"] = ["yes" if n in SPEECH_FUNCTIONS else "" for n in table.index]
     table["description"] = [m.description for m in rig.muscles] + ["opens the mouth (rotation about the jaw joints)"]
     if args.csv:
+        import sys
+
         table.to_csv(sys.stdout, lineterminator="\n")
         return 0
     rows = [(n, r["kind"], r["side"], f"{r['min']:g}..{r['max']:g}", r["lip"], r["speech"], r["description"])
             for n, r in table.iterrows()]
-    head = ("name", "kind", "side", "range", "lip", "speech", "description")
-    widths = [max(len(str(r[i])) for r in rows + [head]) for i in range(6)]
-    for r in [head] + rows:
-        print("  ".join(str(c).ljust(w) for c, w in zip(r[:6], widths)) + "  " + r[6])
+    print_table(("name", "kind", "side", "range", "lip", "speech", "description"), rows)
     return 0

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import textwrap
+
+from visemeface.commands._options import print_table
 
 ORDER = 40
 
@@ -37,21 +38,7 @@ def run(args) -> int:
     classes = _perceptual_classes()
     rows = [(str(int(r["index"])), sym, r["class"], classes.get(sym, ""), r["notes"])
             for sym, r in info.iterrows()]
-    if args.csv:
-        import csv
-        import sys
-
-        w = csv.writer(sys.stdout, lineterminator="\n")
-        w.writerow(["index", "symbol", "class", "perceptual_class", "notes"])
-        w.writerows(rows)
-        return 0
-    head = ("#", "symbol", "class", "seed-002 class", "notes")
-    widths = [max(len(r[i]) for r in rows + [head]) for i in range(4)]
-    indent = sum(widths) + 8
-    print("  ".join(h.ljust(w) for h, w in zip(head, widths + [0])).rstrip())
-    for r in rows:
-        notes = textwrap.wrap(r[4], width=max(30, 110 - indent)) or [""]
-        print("  ".join(c.ljust(w) for c, w in zip(r[:4], widths)) + "  " + notes[0])
-        for more in notes[1:]:
-            print(" " * indent + more)
+    head = ("index", "symbol", "class", "perceptual_class", "notes") if args.csv else \
+        ("#", "symbol", "class", "seed-002 class", "notes")
+    print_table(head, rows, args.csv)
     return 0
