@@ -66,3 +66,27 @@ def fem_face(default_face):
     from visemeface.physics.face_model import build_fem_face
 
     return build_fem_face(default_face)
+
+
+# ------------------------------------------------------------------ fuzz case counts (tests/fuzz)
+#: reader name -> {"read": n, "refused": n, "crashed": n}
+FUZZ_COUNTS: dict[str, dict[str, int]] = {}
+
+
+def record_fuzz(reader: str, outcome: str) -> None:
+    """Count one fuzz case of ``reader``: "read", "refused" (one-line InputError) or "crashed"."""
+    counts = FUZZ_COUNTS.setdefault(reader, {"read": 0, "refused": 0, "crashed": 0})
+    counts[outcome] += 1
+
+
+def pytest_terminal_summary(terminalreporter):
+    if not FUZZ_COUNTS:
+        return
+    terminalreporter.section("fuzzed readers: read, refused with one line, or crashed (a failure)")
+    total = {"read": 0, "refused": 0, "crashed": 0}
+    for reader, c in sorted(FUZZ_COUNTS.items()):
+        terminalreporter.write_line(f"{reader:30s} {sum(c.values()):5d} cases: {c['read']:4d} read, "
+                                    f"{c['refused']:4d} refused, {c['crashed']} untyped crashes")
+        total = {k: total[k] + c[k] for k in total}
+    terminalreporter.write_line(f"{'all readers':30s} {sum(total.values()):5d} cases: {total['read']:4d} read, "
+                                f"{total['refused']:4d} refused, {total['crashed']} untyped crashes")

@@ -21,6 +21,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -77,8 +78,11 @@ class RunCheckpoint:
         try:
             with np.load(path, allow_pickle=False) as z:
                 data = {k: z[k] for k in z.files}
-            done, key = int(data.pop("_frames_done")), str(data.pop("_key"))
-        except (OSError, ValueError, KeyError, EOFError) as exc:
+            done, key = data.pop("_frames_done"), data.pop("_key")
+            if done.shape or done.dtype.kind not in "iu" or key.shape or key.dtype.kind != "U":
+                raise ValueError("wrong type of the frame count or key")
+            done, key = int(done), str(key)
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
             raise InputError(f"not a readable checkpoint ({type(exc).__name__}); remove it or use --force "
                              "to start over", path) from None
         if key != self.key:

@@ -1,0 +1,278 @@
+"""Fuzz every reader of user files: it reads the file or refuses it with an InputError.
+
+Each reader gets hypothesis-generated files (fixed seed, bounded count): valid
+samples mutated at random places with the tokens that broke readers before
+(``nan``, ``1e309``, negative and huge numbers, NUL and non-UTF-8 bytes,
+truncation, duplicated lines), and plain random bytes. Anything other than a
+result or an :class:`~visemeface.errors.InputError` is an untyped crash (a
+traceback and exit 1 for the user) and fails the test. The number of cases
+per reader is printed at the end of the run (``conftest.pytest_terminal_summary``).
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import tempfile
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from visemeface.errors import InputError
+
+from conftest import ROOT, record_fuzz
+
+TOKENS = [b"nan", b"NaN", b"inf", b"-inf", b"1e309", b"-1", b"0", b"-0.0", b"1e-320", b"99999999999999999999",
+          b"", b"\x00", b"\xff\xfe", b"\xe9", b"\n", b"\r\n", b",", b";", b"\t", b" ", b'"', b"[", b"]", b"{",
+          b"}", b"=", b"#", b"<", b">", b"v", b"f", b"xmin", b"intervals", b"jaw", b"\xef\xbb\xbf"]
+
+MUTATION = st.tuples(st.floats(0, 1), st.sampled_from(["insert", "replace", "delete", "truncate", "repeat"]),
+                     st.sampled_from(TOKENS), st.integers(1, 12))
+FUZZ = settings(max_examples=60, deadline=None, derandomize=True, database=None,
+                suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+
+
+def mutate(data: bytes, mutations) -> bytes:
+    """Apply (where, what, token, length) edits to ``data``."""
+    for where, what, token, n in mutations:
+        i = int(where * len(data))
+        if what == "insert":
+            data = data[:i] + token + data[i:]
+        elif what == "replace":
+            data = data[:i] + token + data[i + n:]
+        elif what == "delete":
+            data = data[:i] + data[i + n:]
+        elif what == "truncate":
+            data = data[:i]
+        else:                                   # repeat a stretch (duplicated lines, double headers)
+            data = data[:i + n] + data[i:]
+    return data
+
+
+def shuffle_lines(data: bytes, picks) -> bytes:
+    """Drop, duplicate or swap whole lines (mostly still well-formed files)."""
+    lines = data.split(b"\n")
+    for where, what in picks:
+        i = int(where * (len(lines) - 1))
+        if what == "drop":
+            del lines[i]
+        elif what == "duplicate":
+            lines.insert(i, lines[i])
+        else:
+            lines[i], lines[-1 - i] = lines[-1 - i], lines[i]
+        if not lines:
+            break
+    return b"\n".join(lines)
+
+
+def fuzz_files(seed: bytes):
+    """Files to try: the seed mutated 1-6 times, its lines shuffled, or random bytes."""
+    lines = st.lists(st.tuples(st.floats(0, 1), st.sampled_from(["drop", "duplicate", "swap"])), min_size=1,
+                     max_size=3)
+    return st.one_of(st.lists(MUTATION, min_size=1, max_size=6).map(lambda m: mutate(seed, m)),
+                     lines.map(lambda picks: shuffle_lines(seed, picks)), st.binary(max_size=300))
+
+
+def check_reader(name, read, data: bytes, suffix: str):
+    """``read(path)`` on a file holding ``data``: a result or an InputError, nothing else."""
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / f"input{suffix}"
+        path.write_bytes(data)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")     # "not in the CMU dictionary", clamped values
+                read(path)
+        except InputError as exc:
+            assert str(exc).strip() and "\n" not in str(exc), "an InputError is one line"
+            record_fuzz(name, "refused")
+            return
+        except Exception:
+            record_fuzz(name, "crashed")
+            raise
+    record_fuzz(name, "read")
+
+
+# ---------------------------------------------------------------------------------------------- transcripts
+TRANSCRIPTS = {     # format name (PARSERS, or None: detected) -> shipped sample
+    "lab": "bob_moves_five_boats.lab", "phn": "bob_moves_five_boats.PHN", "timed": "bob_moves_five_boats.txt",
+    "textgrid": "bob_moves_five_boats_short.TextGrid", "mfa-json": "bob_moves_five_boats.json",
+    "mfa-csv": "bob_moves_five_boats.csv", "text": "bob_moves_five_boats_angry.txt",
+    "dectalk": "bob_moves_five_boats_dectalk.txt",
+}
+
+
+@pytest.mark.parametrize("fmt", sorted(TRANSCRIPTS))
+def test_transcript_readers(fmt):
+    from visemeface.speech.transcripts import read_utterance
+
+    sample = ROOT / "transcripts" / TRANSCRIPTS[fmt]
+    seed = sample.read_bytes()
+
+    @FUZZ
+    @given(fuzz_files(seed))
+    def run(data):
+        check_reader(f"transcript ({fmt})", lambda p: read_utterance(p, fmt=fmt), data, sample.suffix)
+    run()
+
+
+# ---------------------------------------------------------------------------------------------- face files
+@pytest.fixture(scope="module")
+def small_face_files(tmp_path_factory):
+    from visemeface.face.procedural import default_face
+
+    folder = tmp_path_factory.mktemp("face")
+    face = default_face(resolution=800)
+    face.save(folder / "face.obj")
+    return folder
+
+
+def test_mesh_and_landmark_readers(small_face_files):
+    from visemeface.face.mesh import load_face
+
+    obj = (small_face_files / "face.obj").read_bytes()
+    marks_path = next(small_face_files.glob("*.json"))
+    marks = marks_path.read_bytes()
+
+    @FUZZ
+    @given(fuzz_files(obj))
+    def mesh(data):
+        check_reader("mesh (OBJ)", lambda p: load_face(p, marks_path), data, ".obj")
+
+    @FUZZ
+    @given(fuzz_files(marks))
+    def landmarks(data):
+        check_reader("landmarks (JSON)", lambda p: load_face(small_face_files / "face.obj", p), data, ".json")
+    mesh()
+    landmarks()
+
+
+def test_rig_reader(default_face):
+    from visemeface.muscles.rig import MuscleRig
+
+    seed = (ROOT / "data" / "rig" / "default.toml").read_bytes()
+
+    @settings(FUZZ, max_examples=40)
+    @given(fuzz_files(seed))
+    def run(data):
+        check_reader("rig (TOML)", lambda p: MuscleRig.from_file(default_face, p), data, ".toml")
+    run()
+
+
+@pytest.mark.parametrize("table", ["visemes", "expressions"])
+def test_posture_table_readers(table, rig):
+    from visemeface.postures import tables
+
+    seed = (ROOT / "data" / ("visemes/visemes.csv" if table == "visemes" else "expressions/emotions.csv")).read_bytes()
+    load = tables.load_visemes if table == "visemes" else tables.load_expressions
+
+    @settings(FUZZ, max_examples=40)
+    @given(fuzz_files(seed))
+    def run(data):
+        check_reader(f"{table} table (CSV)", lambda p: load(p, rig=rig), data, ".csv")
+    run()
+
+
+# ---------------------------------------------------------------------------------------------- run files
+def test_track_and_profile_readers():
+    from visemeface.analysis.profiles import read_profile
+    from visemeface.track import load_track
+
+    track = b"time,jaw,orbicularis_oris\n0,0,0\n0.0333333,0.2,0.1\n0.0666667,0.5,0.3\n"
+    profile = (b"time,count,area,width,height\n0,0,0,0,0\n0.04,1,0.01,0.2,0.05\n0.08,1,0.02,0.3,0.08\n")
+
+    @FUZZ
+    @given(fuzz_files(track))
+    def tracks(data):
+        check_reader("activation track (CSV)", load_track, data, ".csv")
+
+    @FUZZ
+    @given(fuzz_files(profile))
+    def profiles(data):
+        check_reader("opening profile (CSV)", read_profile, data, ".csv")
+    tracks()
+    profiles()
+
+
+def test_sidecar_and_glue_readers():
+    from visemeface.physics.saliva import read_glue_file
+    from visemeface.sidecars import read_video_sidecar
+
+    sidecar = json.dumps({"mouth_box": [10, 20, 50, 30], "fps": 30, "size": [128, 128]}).encode()
+    glue = b"s,glue\n-1,0.08\n0,0.2\n1,0.08\n"
+    s = np.linspace(-0.95, 0.95, 12)
+
+    @FUZZ
+    @given(fuzz_files(sidecar))
+    def sidecars(data):
+        check_reader("video sidecar (JSON)", read_video_sidecar, data, ".json")
+
+    @FUZZ
+    @given(fuzz_files(glue))
+    def glues(data):
+        check_reader("glue file (CSV)", lambda p: read_glue_file(p, s), data, ".csv")
+    sidecars()
+    glues()
+
+
+def test_checkpoint_reader():
+    from visemeface.checkpoint import STATE, VERTICES, RunCheckpoint
+
+    buf = io.BytesIO()
+    np.savez(buf, _frames_done=np.array(2), _key=np.array("k"), u=np.zeros((4, 3)), t=np.array(0.1))
+    seed = buf.getvalue()
+
+    @settings(FUZZ, max_examples=40)
+    @given(fuzz_files(seed))
+    def run(data):
+        with tempfile.TemporaryDirectory() as tmp:
+            folder = Path(tmp) / "out.mp4.checkpoint"
+            folder.mkdir()
+            (folder / VERTICES).write_bytes(np.zeros((2, 4, 3), "<f4").tobytes())
+            (folder / STATE).write_bytes(data)      # the reader looks at folder/state.npz
+            check_reader("checkpoint (state.npz)", lambda p: RunCheckpoint(folder, "k", 4, 30).load(), data, "")
+    run()
+
+
+def test_audio_reader():
+    from visemeface.pipeline import check_audio
+    import soundfile as sf
+
+    buf = io.BytesIO()
+    sf.write(buf, (0.1 * np.sin(np.linspace(0, 200, 1600))).astype(np.float32), 16000, format="WAV")
+    seed = buf.getvalue()
+
+    @settings(FUZZ, max_examples=40)
+    @given(fuzz_files(seed))
+    def run(data):
+        check_reader("audio (WAV)", check_audio, data, ".wav")
+    run()
+
+
+VALUES = st.one_of(st.integers(-2**70, 2**70), st.floats(allow_nan=True, allow_infinity=True), st.text(max_size=5),
+                   st.lists(st.floats(-1e3, 1e3), max_size=4), st.booleans())
+
+
+def test_checkpoint_reader_well_formed_npz():
+    """Readable archives with wrong contents: missing keys, wrong types, NaN, huge counts."""
+    from visemeface.checkpoint import STATE, VERTICES, RunCheckpoint
+
+    @settings(FUZZ, max_examples=60)
+    @given(st.dictionaries(st.sampled_from(["_frames_done", "_key", "u", "t", "saliva"]), VALUES, max_size=5),
+           st.booleans())
+    def run(entries, over_valid):
+        if over_valid:                               # a valid archive with some entries replaced
+            entries = {"_frames_done": 2, "_key": "k", **entries}
+        buf = io.BytesIO()
+        np.savez(buf, **{k: np.asarray(v) for k, v in entries.items()})
+        with tempfile.TemporaryDirectory() as tmp:
+            folder = Path(tmp) / "out.mp4.checkpoint"
+            folder.mkdir()
+            (folder / VERTICES).write_bytes(np.zeros((2, 4, 3), "<f4").tobytes())
+            (folder / STATE).write_bytes(buf.getvalue())
+            check_reader("checkpoint (well-formed npz)", lambda p: RunCheckpoint(folder, "k", 4, 30).load(),
+                         b"", "")
+    run()
