@@ -88,3 +88,56 @@ def test_after_a_kill_the_next_run_resumes_and_removes_what_the_killed_one_left(
     assert sorted(p.name for p in tmp_path.iterdir()) == ["k.mp4", "k.mp4.json", "k.pc2", "k.saliva.csv",
                                                           "k_fr", "k_fr.json"]
     assert not any(p.name.startswith(".") for p in (tmp_path / "k_fr").iterdir() if p.name != ".visemeface-frames.json")
+
+
+LONG_TEXT = ("Bob moves five boats past the old mill while seven quiet sheep watch from the hill and "
+             "the farmer counts them twice before the rain comes down on the valley.")
+KINEMATIC = {
+    "speak": ["speak", "{transcript}"],
+    "say": ["say", LONG_TEXT, "--rate", "120"],
+}
+
+
+def _kinematic(work, command, tag, *more):
+    from conftest import ROOT
+
+    head = [a.format(transcript=ROOT / "transcripts" / "bob_moves_five_boats_long.TextGrid")
+            for a in KINEMATIC[command]]
+    argv = [sys.executable, "-m", "visemeface", *head, "--fps", "120", "--size", "64", "--msaa", "0", "-q",
+            "-o", f"{tag}.mp4", "--frames", f"{tag}_fr", "--pc2", f"{tag}.pc2", "--measures", f"{tag}.csv", *more]
+    return subprocess.Popen(argv, cwd=work, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _files(folder):
+    return {p.relative_to(folder).as_posix(): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGKILL])
+@pytest.mark.parametrize("command", sorted(KINEMATIC))
+def test_speak_and_say_resume_byte_identical_after_any_interruption(tmp_path, command, sig):
+    """Interrupted mid-render by Ctrl-C, SIGTERM or a kill, then --resume: the very bytes of an uninterrupted
+    run (video, PNGs, PC2, measures), nothing else left in the folder, and Ctrl-C/SIGTERM end it in < 2 s."""
+    ref, cut = tmp_path / "ref", tmp_path / "cut"
+    ref.mkdir(), cut.mkdir()
+    proc = _kinematic(ref, command, "t")
+    assert proc.wait(timeout=240) == 0, proc.communicate()[1]
+
+    proc = _kinematic(cut, command, "t")
+    partial = cut / "t_fr.partial"
+    t0 = time.monotonic()
+    while not (partial.is_dir() and len(list(partial.glob("*.png"))) >= 3):
+        assert proc.poll() is None, f"finished before it could be interrupted: {proc.communicate()}"
+        assert time.monotonic() - t0 < 120, "no frame rendered in time"
+        time.sleep(0.02)
+    t0 = time.monotonic()
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=10)
+    if sig != signal.SIGKILL:
+        assert time.monotonic() - t0 < 2.0 and proc.returncode == 130 and "interrupted" in err
+        assert not any((cut / n).exists() for n in ("t.mp4", "t.pc2", "t.csv", "t_fr"))  # nothing half done
+    proc = _kinematic(cut, command, "t", "--resume")
+    assert proc.wait(timeout=240) == 0, proc.communicate()[1]
+    got, want = _files(cut), _files(ref)
+    assert sorted(got) == sorted(want)              # no temporaries, partial folders or checkpoints left
+    for name in want:
+        assert got[name] == want[name], f"{name} differs from the uninterrupted run"
