@@ -1,0 +1,77 @@
+"""README's commands run top to bottom in one fresh folder, none refused for an existing output.
+
+The folder holds a copy of ``transcripts/`` as a fresh clone does. Every ``visemeface`` line of the
+README's bash blocks runs as written, in order; the physical simulations (``simulate``, ``--physics``,
+minutes each) are covered by tests/physics and tests/cli/test_signals.py and are left out here, but
+their output names must still not collide with any other command's.
+"""
+
+from __future__ import annotations
+
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from conftest import ROOT
+
+pytestmark = pytest.mark.slow
+
+
+def readme_commands():
+    """The ``visemeface ...`` command lines of README.md's bash blocks, in order (comments removed)."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    commands = []
+    for block in re.findall(r"```bash\n(.*?)```", text, flags=re.S):
+        for line in block.splitlines():
+            argv = shlex.split(line, comments=True)
+            if argv and argv[0].endswith("visemeface"):
+                commands.append(argv[1:])
+    return commands
+
+
+def _outputs(argv):
+    """The files a command line names after an output option."""
+    outs = set()
+    for opt, value in zip(argv, argv[1:]):
+        if opt in ("-o", "--output", "--export", "--frames", "--obj", "--pc2", "--gltf", "--track", "--measures",
+                   "--plot", "--overlay", "--camera-json"):
+            outs.add(value)
+    video = {"-o", "--output", "--no-video"} & set(argv)
+    if argv[0] in ("speak", "say") and not video:           # the default video: TRANSCRIPT.mp4 or say.mp4
+        outs.add("say.mp4" if argv[0] == "say" else Path(argv[1]).stem + ".mp4")
+    return outs
+
+
+def _physics(argv):
+    return argv[0] == "simulate" or "--physics" in argv
+
+
+def test_readme_names_no_output_twice():
+    seen = {}
+    for argv in readme_commands():
+        for out in _outputs(argv):
+            assert out not in seen, f"{out} is written by `{' '.join(seen[out])}` and by `{' '.join(argv)}`"
+            seen[out] = argv
+
+
+def test_readme_commands_run_top_to_bottom_in_a_fresh_folder(tmp_path):
+    shutil.copytree(ROOT / "transcripts", tmp_path / "transcripts")
+    ran = 0
+    for argv in readme_commands():
+        if _physics(argv):
+            continue
+        proc = subprocess.run([sys.executable, "-m", "visemeface", *argv, "-q"] if _quiet(argv) else
+                              [sys.executable, "-m", "visemeface", *argv], cwd=tmp_path, capture_output=True,
+                              text=True, timeout=300)
+        assert proc.returncode == 0, f"`visemeface {shlex.join(argv)}` failed: {proc.stderr.strip()}"
+        ran += 1
+    assert ran >= 20
+
+
+def _quiet(argv):
+    return argv[0] in ("speak", "say")       # no progress bars in the log
