@@ -205,8 +205,8 @@ def check_audio(path) -> float:
         samples, _ = sf.read(str(path), frames=min(info.frames, 60 * info.samplerate), dtype="float32")
     except InputError:
         raise
-    except Exception as exc:  # soundfile raises its own LibsndfileError / RuntimeError
-        raise InputError(f"unreadable audio ({str(exc).splitlines()[0]})", path) from None
+    except Exception:  # soundfile raises its own LibsndfileError / RuntimeError, with libsndfile's wording
+        raise InputError("not a sound file that can be read (WAV, FLAC, OGG or MP3)", path) from None
     if not np.all(np.isfinite(samples)):
         raise InputError("audio holds non-finite samples (NaN or infinity)", path)
     return info.frames / info.samplerate

@@ -79,3 +79,14 @@ def test_big_and_nan_numbers_are_written_plainly(here, capsys):
         assert main(["speak", "t.txt", "--fps", value]) == 2
         err = _one_line_error(capsys)
         assert "np.float64" not in err and not any(len(w) > 30 for w in err.split())
+
+
+def test_a_fake_mp3_is_refused_in_plain_words(here, capsys):
+    """libsndfile's wording ("possibly a pipe?") is not a message for the user."""
+    from visemeface.resources import transcripts_path
+
+    (here / "fake.mp3").write_bytes(b"xx")
+    assert main(["speak", str(transcripts_path("bob_moves_five_boats.txt")), "--audio", "fake.mp3", "-o", "f.mp4"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == "visemeface: error: fake.mp3: not a sound file that can be read (WAV, FLAC, OGG or MP3)"
+    assert not (here / "f.mp4").exists()
