@@ -110,13 +110,7 @@ def test_transcript_readers(fmt):
     from visemeface.speech.transcripts import read_utterance
 
     sample = ROOT / "transcripts" / TRANSCRIPTS[fmt]
-    seed = sample.read_bytes()
-
-    @FUZZ
-    @given(fuzz_files(seed))
-    def run(data):
-        check_reader(f"transcript ({fmt})", lambda p: read_utterance(p, fmt=fmt), data, sample.suffix)
-    run()
+    fuzz(f"transcript ({fmt})", lambda p: read_utterance(p, fmt=fmt), sample.read_bytes(), sample.suffix)
 
 
 # ---------------------------------------------------------------------------------------------- face files
@@ -137,17 +131,8 @@ def test_mesh_and_landmark_readers(small_face_files):
     marks_path = next(small_face_files.glob("*.json"))
     marks = marks_path.read_bytes()
 
-    @FUZZ
-    @given(fuzz_files(obj))
-    def mesh(data):
-        check_reader("mesh (OBJ)", lambda p: load_face(p, marks_path), data, ".obj")
-
-    @FUZZ
-    @given(fuzz_files(marks))
-    def landmarks(data):
-        check_reader("landmarks (JSON)", lambda p: load_face(small_face_files / "face.obj", p), data, ".json")
-    mesh()
-    landmarks()
+    fuzz("mesh (OBJ)", lambda p: load_face(p, marks_path), obj, ".obj")
+    fuzz("landmarks (JSON)", lambda p: load_face(small_face_files / "face.obj", p), marks, ".json")
 
 
 def test_rig_reader(default_face):
@@ -155,11 +140,7 @@ def test_rig_reader(default_face):
 
     seed = (ROOT / "data" / "rig" / "default.toml").read_bytes()
 
-    @settings(FUZZ, max_examples=40)
-    @given(fuzz_files(seed))
-    def run(data):
-        check_reader("rig (TOML)", lambda p: MuscleRig.from_file(default_face, p), data, ".toml")
-    run()
+    fuzz("rig (TOML)", lambda p: MuscleRig.from_file(default_face, p), seed, ".toml", 40)
 
 
 @pytest.mark.parametrize("table", ["visemes", "expressions"])
@@ -169,53 +150,35 @@ def test_posture_table_readers(table, rig):
     seed = (ROOT / "data" / ("visemes/visemes.csv" if table == "visemes" else "expressions/emotions.csv")).read_bytes()
     load = tables.load_visemes if table == "visemes" else tables.load_expressions
 
-    @settings(FUZZ, max_examples=40)
-    @given(fuzz_files(seed))
-    def run(data):
-        check_reader(f"{table} table (CSV)", lambda p: load(p, rig=rig), data, ".csv")
-    run()
+    fuzz(f"{table} table (CSV)", lambda p: load(p, rig=rig), seed, ".csv", 40)
 
 
 # ---------------------------------------------------------------------------------------------- run files
-def test_track_and_profile_readers():
+def fuzz(name, read, seed: bytes, suffix: str, examples: int = 60):
+    """Run ``read`` on ``examples`` generated files made from ``seed``."""
+    @settings(FUZZ, max_examples=examples)
+    @given(fuzz_files(seed))
+    def run(data):
+        check_reader(name, read, data, suffix)
+    run()
+
+
+TRACK = b"time,jaw,orbicularis_oris\n0,0,0\n0.0333333,0.2,0.1\n0.0666667,0.5,0.3\n"
+PROFILE = b"time,count,area,width,height\n0,0,0,0,0\n0.04,1,0.01,0.2,0.05\n0.08,1,0.02,0.3,0.08\n"
+SIDECAR = json.dumps({"mouth_box": [10, 20, 50, 30], "fps": 30, "size": [128, 128]}).encode()
+GLUE = b"s,glue\n-1,0.08\n0,0.2\n1,0.08\n"
+
+
+def test_track_profile_sidecar_and_glue_readers():
     from visemeface.analysis.profiles import read_profile
-    from visemeface.track import load_track
-
-    track = b"time,jaw,orbicularis_oris\n0,0,0\n0.0333333,0.2,0.1\n0.0666667,0.5,0.3\n"
-    profile = (b"time,count,area,width,height\n0,0,0,0,0\n0.04,1,0.01,0.2,0.05\n0.08,1,0.02,0.3,0.08\n")
-
-    @FUZZ
-    @given(fuzz_files(track))
-    def tracks(data):
-        check_reader("activation track (CSV)", load_track, data, ".csv")
-
-    @FUZZ
-    @given(fuzz_files(profile))
-    def profiles(data):
-        check_reader("opening profile (CSV)", read_profile, data, ".csv")
-    tracks()
-    profiles()
-
-
-def test_sidecar_and_glue_readers():
     from visemeface.physics.saliva import read_glue_file
     from visemeface.sidecars import read_video_sidecar
+    from visemeface.track import load_track
 
-    sidecar = json.dumps({"mouth_box": [10, 20, 50, 30], "fps": 30, "size": [128, 128]}).encode()
-    glue = b"s,glue\n-1,0.08\n0,0.2\n1,0.08\n"
-    s = np.linspace(-0.95, 0.95, 12)
-
-    @FUZZ
-    @given(fuzz_files(sidecar))
-    def sidecars(data):
-        check_reader("video sidecar (JSON)", read_video_sidecar, data, ".json")
-
-    @FUZZ
-    @given(fuzz_files(glue))
-    def glues(data):
-        check_reader("glue file (CSV)", lambda p: read_glue_file(p, s), data, ".csv")
-    sidecars()
-    glues()
+    fuzz("activation track (CSV)", load_track, TRACK, ".csv")
+    fuzz("opening profile (CSV)", read_profile, PROFILE, ".csv")
+    fuzz("video sidecar (JSON)", read_video_sidecar, SIDECAR, ".json")
+    fuzz("glue file (CSV)", lambda p: read_glue_file(p, np.linspace(-0.95, 0.95, 12)), GLUE, ".csv")
 
 
 def test_checkpoint_reader():
@@ -243,13 +206,7 @@ def test_audio_reader():
 
     buf = io.BytesIO()
     sf.write(buf, (0.1 * np.sin(np.linspace(0, 200, 1600))).astype(np.float32), 16000, format="WAV")
-    seed = buf.getvalue()
-
-    @settings(FUZZ, max_examples=40)
-    @given(fuzz_files(seed))
-    def run(data):
-        check_reader("audio (WAV)", check_audio, data, ".wav")
-    run()
+    fuzz("audio (WAV)", check_audio, buf.getvalue(), ".wav", 40)
 
 
 VALUES = st.one_of(st.integers(-2**70, 2**70), st.floats(allow_nan=True, allow_infinity=True), st.text(max_size=5),
