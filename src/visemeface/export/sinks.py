@@ -90,6 +90,9 @@ class Sink:
     suffixes: ClassVar[tuple[str, ...]] = ()
     folder: ClassVar[bool] = False
     needs_image: ClassVar[bool] = False
+    #: More options of this sink: ``((flag, ...), argparse keywords with a "dest")``; their values reach
+    #: the sink as ``settings[dest]``.
+    arguments: ClassVar[tuple] = ()
 
     def __init__(self, path, force: bool = False, **settings):
         self.path = Path(path)
@@ -154,6 +157,8 @@ def add_sink_arguments(group: argparse._ActionsContainer, skip: tuple[str, ...] 
             continue
         group.add_argument(option_of(cls), *cls.aliases, dest=dest_of(cls), type=Path, metavar=cls.metavar,
                            help=cls.help)
+        for flags, kw in cls.arguments:
+            group.add_argument(*flags, **kw)
 
 
 def sinks_from_args(args, force: bool, skip: tuple[str, ...] = (), **settings) -> list[Sink]:
@@ -164,7 +169,8 @@ def sinks_from_args(args, force: bool, skip: tuple[str, ...] = (), **settings) -
             continue
         path = getattr(args, dest_of(cls), None)
         if path is not None:
-            out.append(cls(path, force=force, **settings))
+            own = {kw["dest"]: getattr(args, kw["dest"], kw.get("default")) for _, kw in cls.arguments}
+            out.append(cls(path, force=force, **settings, **own))
     return out
 
 
