@@ -77,6 +77,7 @@ class ShapeFit:
         c = bd + self.mu
         rhs = solve_triangular(self.R, c, trans="T", lower=False)
         wm = lsq_linear(self.R, rhs, bounds=(0.0, 1.0), method="bvls").x if len(self.made) else np.zeros(0)
+        wm = np.clip(wm, 0.0, 1.0)  # BVLS may step a rounding error past a bound
         sq = float(wm @ self.G @ wm - 2.0 * wm @ bd + d @ d)
         w = np.zeros(self.k)
         w[self.made] = wm
