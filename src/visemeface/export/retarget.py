@@ -24,13 +24,12 @@ LIVE_LINK_ROTATIONS = ("HeadYaw", "HeadPitch", "HeadRoll", "LeftEyeYaw", "LeftEy
 
 def live_link_timecode(t: float, fps: float) -> str:
     """``HH:MM:SS:FF.fff`` of time ``t`` (s) at ``fps``: frame ``FF`` within the second and its fraction."""
-    ms = int(round(t * 1000.0))
-    s, frac_ms = divmod(ms, 1000)
-    h, rem = divmod(s, 3600)
-    m, s = divmod(rem, 60)
-    f = frac_ms / 1000.0 * fps
-    ff = int(np.floor(f + 1e-6))
-    return f"{h:02d}:{m:02d}:{s:02d}:{ff:02d}.{int(round((f - ff) * 1000)) % 1000:03d}"
+    whole = int(np.floor(t + 1e-9))
+    f = round((t - whole) * fps, 3)
+    ff = int(np.floor(f))
+    m, s = divmod(whole, 60)
+    h, m = divmod(m, 60)
+    return f"{h:02d}:{m:02d}:{s:02d}:{ff:02d}.{int(round((f - ff) * 1000)):03d}"
 
 
 def write_weights(path, vocabulary: str, names, times, weights, fps: float, force: bool = False) -> None:
