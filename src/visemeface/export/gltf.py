@@ -249,10 +249,10 @@ class GltfSink(Sink):
         super().open(run)
         self.times, self.weights = [], []
         if self.shapes != "muscles":
-            from visemeface.retarget import ShapeFit, vocabulary
+            from visemeface.retarget import ShapeFit, moving_vertices, vocabulary
 
             self.vocab = vocabulary(self.shapes, run.rig)
-            self.fit = ShapeFit(self.vocab)
+            self.fit = ShapeFit(self.vocab, moving_vertices(run.rig))
             self.rest = np.asarray(run.face.vertices, dtype=np.float64)
 
     def write(self, frame) -> None:

@@ -50,14 +50,17 @@ class ShapeFit:
     ----------
     vocab : :class:`~visemeface.retarget.recipes.Vocabulary`
     mask : (N,) bool, optional
-        Vertices over which residuals are averaged (default: all).
+        The vertices fitted and over which residuals are averaged (default: all); with
+        :func:`moving_vertices` the others (which no shape moves) only cost time.
     """
 
     def __init__(self, vocab, mask: np.ndarray | None = None):
         self.vocab = vocab
         self.k = len(vocab.names)
         self.made = np.flatnonzero(vocab.made)
-        b = vocab.shapes[self.made].reshape(len(self.made), -1)
+        n = vocab.shapes.shape[1]
+        self.mask = np.ones(n, bool) if mask is None else np.asarray(mask, bool)
+        b = vocab.shapes[self.made][:, self.mask].reshape(len(self.made), -1)
         self.B = b
         self.G = b @ b.T
         g = np.trace(self.G) / max(len(self.made), 1)
@@ -67,12 +70,11 @@ class ShapeFit:
         H = self.G + self.lam * np.eye(len(self.made)) + self.mu * np.outer(ones, ones)
         self.R, _ = cho_factor(H, lower=False)
         self.R = np.triu(self.R)
-        n = vocab.shapes.shape[1]
-        self.n_measured = int(n if mask is None else np.count_nonzero(mask))
+        self.n_measured = int(np.count_nonzero(self.mask))
 
     def frame(self, displacement: np.ndarray) -> tuple[np.ndarray, float]:
         """Weights (K,) and residual RMS (m) of one frame's displacement (N, 3)."""
-        d = np.asarray(displacement, dtype=np.float64).reshape(-1)
+        d = np.asarray(displacement, dtype=np.float64)[self.mask].reshape(-1)
         bd = self.B @ d
         c = bd + self.mu
         rhs = solve_triangular(self.R, c, trans="T", lower=False)
