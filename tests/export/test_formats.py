@@ -119,7 +119,7 @@ def test_rhubarb_json_of_a_run(exported):
 
 @pytest.mark.parametrize("extra,message", [
     (["--rhubarb", "r.txt"], "must end in .tsv or .json or .xml or .dat"),
-    (["--rhubarb", "r.dat", "--dat-fps", "0"], "--dat-fps must be a frame rate"),
+    (["--rhubarb", "r.dat", "--dat-fps", "0"], "--dat-fps: must be a frame rate"),
     (["--livelink", "l.json"], "must end in .csv"),
     (["--gltf", "g.glb", "--gltf-shapes", "arkitt"], "invalid choice"),
 ])

@@ -66,12 +66,26 @@ def write_cues(path, cues, duration: float, sound_file: str = "", dat_fps: float
         tmp.write_text(text, encoding="utf-8")
 
 
+def dat_fps(text) -> float:
+    """``--dat-fps``'s value: a frame rate in (0, 1000] (checked while parsing, with or without --rhubarb)."""
+    import argparse
+
+    try:
+        value = float(text)
+    except (TypeError, ValueError):
+        value = float("nan")
+    if not (math.isfinite(value) and 0 < value <= 1000):
+        raise argparse.ArgumentTypeError(f"must be a frame rate in (0, 1000], got {text}")
+    return value
+
+
 def _fps(value) -> float:
     if value is None:
         return DAT_FPS
-    if not (isinstance(value, (int, float)) and math.isfinite(value) and 0 < value <= 1000):
-        raise InputError(f"--dat-fps must be a frame rate in (0, 1000], got {value}")
-    return float(value)
+    try:
+        return dat_fps(value)
+    except Exception as exc:
+        raise InputError(f"--dat-fps {exc}") from None
 
 
 @register
@@ -83,7 +97,7 @@ class RhubarbSink(Sink):
     help = "also write Rhubarb Lip Sync mouth cues (A-H, X) as TSV, JSON, XML or Moho DAT (by the suffix)"
     suffixes = tuple(WRITERS)
     arguments = (
-        (("--dat-fps",), dict(dest="dat_fps", type=float, metavar="FPS",
+        (("--dat-fps",), dict(dest="dat_fps", type=dat_fps, metavar="FPS",
                               help=f"frame rate of a --rhubarb .dat file (default {DAT_FPS:g}, as Rhubarb's)")),
         (("--dat-preston-blair",), dict(dest="dat_preston_blair", action="store_true",
                                         help="Preston Blair shape names in a --rhubarb .dat file (MBP, etc, E, AI, "
