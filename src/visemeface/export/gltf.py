@@ -2,9 +2,11 @@
 
 Checked with the Khronos glTF validator (no errors, warnings or infos) and played
 with three.js's GLTFLoader + AnimationMixer (poses equal the rig's within 7 µm).
-Blender: *File > Import > glTF 2.0* gives the face with one shape key per morph
-target and the speech as a shape-key action (set the scene's frame rate to the
-export's first). three.js: ``GLTFLoader`` then
+Vertex colours are written linear (``COLOR_0``, as glTF defines them), the material
+non-metallic; ``asset.extras`` holds the frame rate, frame count and source.
+Blender: set the scene's frame rate to ``asset.extras.fps`` first, then *File > Import >
+glTF 2.0* gives the face with one shape key per morph target and the speech as a
+shape-key action, one key a frame plus the held last pose. three.js: ``GLTFLoader`` then
 ``new AnimationMixer(gltf.scene).clipAction(gltf.animations[0]).play()``.
 """
 
@@ -96,6 +98,27 @@ def glb_bytes(gltf: dict, binary: bytes) -> bytes:
             + struct.pack("<I4s", len(binary), b"BIN\0") + binary)
 
 
+def linear_colours(colors) -> np.ndarray:
+    """Display colours (floats in 0..1 or uint8; RGB or RGBA) -> glTF's linear floats (alpha kept)."""
+    c = np.asarray(colors)
+    c = c / 255.0 if np.issubdtype(c.dtype, np.integer) else c
+    c = np.clip(c.astype(np.float64), 0.0, 1.0)
+    c[:, :3] = srgb_to_linear(c[:, :3])
+    return c
+
+
+def _check_animation(n: int, tg: np.ndarray, target_names, t: np.ndarray, w: np.ndarray) -> None:
+    k = len(tg)
+    if k == 0 or tg.shape != (k, n, 3) or len(target_names) != k:
+        raise ValueError(f"targets must be (K >= 1, {n}, 3) with K names")
+    if w.shape != (len(t), k):
+        raise ValueError(f"weights must be ({len(t)}, {k}), got {w.shape}")
+    if len(t) == 0 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
+        raise ValueError("keyframe times must be finite and increasing")
+    if not (np.all(np.isfinite(w)) and np.all(np.isfinite(tg))):
+        raise ValueError("morph targets and weights must be finite")
+
+
 def write_morph_animation_glb(path, vertices: np.ndarray, triangles: np.ndarray,
                               targets: np.ndarray, target_names: Sequence[str],
                               times: np.ndarray, weights: np.ndarray,
@@ -149,14 +172,7 @@ def write_morph_animation_glb(path, vertices: np.ndarray, triangles: np.ndarray,
     t = np.asarray(times, dtype=np.float64)
     w = np.asarray(weights, dtype=np.float64)
     n, k = len(x), len(tg)
-    if k == 0 or tg.shape != (k, n, 3) or len(target_names) != k:
-        raise ValueError(f"targets must be (K >= 1, {n}, 3) with K names")
-    if w.shape != (len(t), k):
-        raise ValueError(f"weights must be ({len(t)}, {k}), got {w.shape}")
-    if len(t) == 0 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
-        raise ValueError("keyframe times must be finite and increasing")
-    if not (np.all(np.isfinite(w)) and np.all(np.isfinite(tg))):
-        raise ValueError("morph targets and weights must be finite")
+    _check_animation(n, tg, target_names, t, w)
 
     buf = _GlbBuffer()
     attrs = {
@@ -165,12 +181,8 @@ def write_morph_animation_glb(path, vertices: np.ndarray, triangles: np.ndarray,
                           .astype("<f4"), "VEC3", _ARRAY_BUFFER),
     }
     if colors is not None:
-        c = np.asarray(colors)
-        c = c / 255.0 if np.issubdtype(c.dtype, np.integer) else c
-        c = np.clip(c.astype(np.float64), 0.0, 1.0)
-        c[:, :3] = srgb_to_linear(c[:, :3])
-        attrs["COLOR_0"] = buf.add(c.astype("<f4"), "VEC4" if c.shape[1] == 4 else "VEC3",
-                                   _ARRAY_BUFFER)
+        c = linear_colours(colors)
+        attrs["COLOR_0"] = buf.add(c.astype("<f4"), "VEC4" if c.shape[1] == 4 else "VEC3", _ARRAY_BUFFER)
     idx_dtype = "<u2" if n <= 65535 else "<u4"
     indices = buf.add(tri.ravel().astype(idx_dtype), "SCALAR", _ELEMENT_ARRAY_BUFFER)
     target_refs = [{"POSITION": buf.add(tg[i].astype("<f4"), "VEC3", _ARRAY_BUFFER)}

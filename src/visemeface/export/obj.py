@@ -56,8 +56,8 @@ def mtl_text(names, colours: np.ndarray) -> str:
     from visemeface.export.gltf import srgb_to_linear
 
     lin = srgb_to_linear(colours)
-    return "".join(f"newmtl {n}\nKd {c[0]:.5f} {c[1]:.5f} {c[2]:.5f}\nKa 0 0 0\nKs 0.04 0.04 0.04\nNs 30\nd 1\nillum 2\n\n"
-                   for n, c in zip(names, lin))
+    return "".join(f"newmtl {n}\nKd {c[0]:.5f} {c[1]:.5f} {c[2]:.5f}\nKa 0 0 0\nKs 0.04 0.04 0.04\n"
+                   "Ns 30\nd 1\nillum 2\n\n" for n, c in zip(names, lin))
 
 
 def material_faces_text(triangles: np.ndarray, colours: np.ndarray, names, palette: np.ndarray) -> str:

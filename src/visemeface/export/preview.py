@@ -145,7 +145,8 @@ def three_bundle() -> str:
     return path.read_text(encoding="utf-8")
 
 
-def preview_html(glb: bytes, audio: bytes | None = None, audio_type: str = "audio/wav", title: str = "visemeface") -> str:
+def preview_html(glb: bytes, audio: bytes | None = None, audio_type: str = "audio/wav",
+                 title: str = "visemeface") -> str:
     """The page (module docstring) for a .glb's bytes and optional sound bytes."""
     if glb[:4] != b"glTF":
         raise InputError("not a binary glTF (.glb) file")
@@ -170,7 +171,8 @@ def glb_duration(glb: bytes) -> float:
     if kind != b"JSON":
         raise InputError("binary glTF without a JSON chunk")
     doc = json.loads(glb[20:20 + length])
-    times = [doc["accessors"][s["input"]].get("max", [0.0])[0] for a in doc.get("animations", []) for s in a["samplers"]]
+    times = [doc["accessors"][s["input"]].get("max", [0.0])[0]
+             for a in doc.get("animations", []) for s in a["samplers"]]
     return float(max(times, default=0.0))
 
 

@@ -40,7 +40,8 @@ def json_text(cues, duration: float, sound_file: str = "") -> str:
 def xml_text(cues, duration: float, sound_file: str = "") -> str:
     rows = "".join(f'    <mouthCue start="{a:.2f}" end="{b:.2f}">{s}</mouthCue>\n' for a, b, s in cues)
     return ('<?xml version="1.0" encoding="utf-8"?>\n<rhubarbResult>\n  <metadata>\n'
-            f"    <soundFile>{escape(sound_file)}</soundFile>\n    <duration>{centiseconds(duration) / 100:.2f}</duration>\n"
+            f"    <soundFile>{escape(sound_file)}</soundFile>\n"
+            f"    <duration>{centiseconds(duration) / 100:.2f}</duration>\n"
             f"  </metadata>\n  <mouthCues>\n{rows}  </mouthCues>\n</rhubarbResult>\n")
 
 
