@@ -22,3 +22,13 @@ def exported(tmp_path_factory):
         args += [option, str(root / name)]
     assert main(args) == 0
     return root
+
+
+@pytest.fixture(scope="session")
+def arkit_glb(tmp_path_factory):
+    """A glb with ARKit-named morph targets (``--gltf-shapes arkit``) of a short utterance."""
+    root = tmp_path_factory.mktemp("arkit")
+    (root / "s.txt").write_text("hi\n")
+    assert main(["speak", str(root / "s.txt"), "--no-video", "-q", "--gltf", str(root / "k.glb"),
+                 "--gltf-shapes", "arkit"]) == 0
+    return root / "k.glb"
