@@ -61,18 +61,19 @@ def mtl_text(names, colours: np.ndarray) -> str:
 
 
 def material_faces_text(triangles: np.ndarray, colours: np.ndarray, names, palette: np.ndarray) -> str:
-    """``usemtl``-grouped ``f v//vn`` lines (face order kept): each triangle takes the palette colour
-    nearest the mean colour of its vertices."""
+    """``f v//vn`` lines in one ``usemtl`` block a material (palette order; the triangles' order kept
+    within a block): each triangle takes the palette colour nearest the mean colour of its vertices.
+    Vertex order is untouched (what a point cache needs); readers that split a mesh by material
+    (trimesh) make one piece a block."""
     tri = np.asarray(triangles, dtype=np.int64)
     mean = np.asarray(colours, dtype=np.float64)[tri].mean(axis=1)
     which = np.argmin(((mean[:, None, :] - palette[None]) ** 2).sum(axis=2), axis=1)
-    out, start = [], 0
-    cuts = np.flatnonzero(np.diff(which)) + 1
-    for end in [*cuts, len(tri)]:
-        block = tri[start:end] + 1
-        out.append(f"usemtl {names[which[start]]}\n")
-        out.append(("f %d//%d %d//%d %d//%d\n" * len(block)) % tuple(np.repeat(block, 2, axis=1).ravel()))
-        start = end
+    out = []
+    for m, name in enumerate(names):
+        block = tri[which == m] + 1
+        if len(block):
+            out.append(f"usemtl {name}\n")
+            out.append(("f %d//%d %d//%d %d//%d\n" * len(block)) % tuple(np.repeat(block, 2, axis=1).ravel()))
     return "".join(out)
 
 
