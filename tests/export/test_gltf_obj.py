@@ -85,3 +85,11 @@ def test_preview_command(exported, tmp_path, capsys):
         assert main(["preview", *args]) == 2
         assert message in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["p.html"]
+
+
+def test_preview_without_a_path_goes_beside_the_video(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "s.txt").write_text("hi\n")
+    assert main(["speak", "s.txt", "--size", "32", "--msaa", "0", "-q", "-o", "take.mp4", "--preview"]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.txt", "take.html", "take.mp4", "take.mp4.json"]
+    assert "VF3" in (tmp_path / "take.html").read_text()

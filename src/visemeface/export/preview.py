@@ -196,8 +196,10 @@ class PreviewSink(Sink):
 
     name = "preview"
     metavar = "FILE.html"
-    help = "also write a self-contained web page (three.js, offline) that plays the animation with --audio"
+    help = ("also write a self-contained web page (three.js, offline) that plays the animation with --audio "
+            "(no FILE: beside the MP4)")
     suffixes = (".html",)
+    beside_video = ".html"
 
     def close(self) -> None:
         from visemeface.export.gltf import write_run_glb
