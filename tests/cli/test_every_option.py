@@ -27,6 +27,7 @@ BASE = {
     "simulate": ["part"],
     "analyze": ["frames", "--box", "2,4,12,6", "-o", "a.csv"],
     "compare": ["p1.csv", "p2.csv"],
+    "preview": ["a.glb"],
 }
 #: Options that take no invalid value, with the reason.
 FREE = {}
@@ -76,6 +77,10 @@ def prepared(tmp_path_factory):
                             "area": [0.0, 0.1, 0.2], "width": [0.0, 0.5, 0.6], "height": [0.0, 0.1, 0.2]})
     profile.to_csv(root / "p1.csv", index=False)
     profile.to_csv(root / "p2.csv", index=False)
+    from visemeface.export.gltf import write_morph_animation_glb
+
+    tri = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    write_morph_animation_glb(root / "a.glb", tri, [[0, 1, 2]], tri[None] * 0.1, ["m"], [0.0, 1.0], [[0.0], [1.0]])
     return root
 
 

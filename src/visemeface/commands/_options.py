@@ -92,7 +92,7 @@ def sinks_from_args(args, default_video: Path, defaults: dict | None = None) -> 
         raise InputError("-o/--output names a video, but --no-video asks for none")
     if not args.no_video:
         sinks.append(SINKS["video"](args.output or default_video, force=args.force))
-    sinks += others(args, force=args.force, skip=("video",), resume=args.resume)
+    sinks += others(args, force=args.force, skip=("video",), video=args.output or default_video, resume=args.resume)
     for name, path in (defaults or {}).items():
         if not any(s.name == name for s in sinks):
             sinks.append(SINKS[name](path, force=args.force))

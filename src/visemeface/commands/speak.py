@@ -121,7 +121,8 @@ def animate_utterance(utterance, args, sinks, render, physics) -> int:
     checkpoint = opt.checkpoint_of(motion, sinks, args)
     stats = pipeline.run(motion, sinks, render,
                          info=dict(audio=args.audio, rig=rig, track=track, end_time=utterance.end,
-                                   extra={"motion_key": motion.key()}),
+                                   extra={"motion_key": motion.key(), "utterance": utterance, "interp": args.interp,
+                                          "source": str(getattr(args, "transcript", None) or "text")}),
                          checkpoint=checkpoint, resume=args.resume, show_progress=not args.quiet)
     if not args.quiet:
         print(pipeline.summary(stats, args.fps))

@@ -3,13 +3,16 @@
 :mod:`.video` (MP4 + audio + mouth-box sidecar), :mod:`.images` (PNG frames,
 resumable), :mod:`.obj` (OBJ sequence), :mod:`.pc2` (point cache),
 :mod:`.gltf` (morph-target animation), :mod:`.tables` (activation track and
-per-frame measures). Writers are pure over numpy arrays and stream (one frame
-in, one frame written); every file appears under its final name only when
-complete (:mod:`visemeface.outputs`).
+per-frame measures), :mod:`.retarget` (ARKit/Live Link, VRM, Oculus weights),
+:mod:`.rhubarb` (Rhubarb Lip Sync cues), :mod:`.preview` (a self-contained three.js
+page). Writers are pure over numpy arrays and stream (one frame in, one frame
+written); every file appears under its final name only when complete
+(:mod:`visemeface.outputs`).
 """
 
 # Registration order is the order of the command-line options.
 from visemeface.export import video, images, obj, pc2, gltf, tables  # noqa: F401,I001  # isort: skip
+from visemeface.export import retarget, rhubarb, preview  # noqa: F401,I001  # isort: skip
 from visemeface.export.sinks import SINKS, RunInfo, Sink, register
 
 __all__ = ["SINKS", "RunInfo", "Sink", "register"]

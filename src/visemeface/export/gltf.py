@@ -2,9 +2,11 @@
 
 Checked with the Khronos glTF validator (no errors, warnings or infos) and played
 with three.js's GLTFLoader + AnimationMixer (poses equal the rig's within 7 µm).
-Blender: *File > Import > glTF 2.0* gives the face with one shape key per morph
-target and the speech as a shape-key action (set the scene's frame rate to the
-export's first). three.js: ``GLTFLoader`` then
+Vertex colours are written linear (``COLOR_0``, as glTF defines them), the material
+non-metallic; ``asset.extras`` holds the frame rate, frame count and source.
+Blender: set the scene's frame rate to ``asset.extras.fps`` first, then *File > Import >
+glTF 2.0* gives the face with one shape key per morph target and the speech as a
+shape-key action, one key a frame plus the held last pose. three.js: ``GLTFLoader`` then
 ``new AnimationMixer(gltf.scene).clipAction(gltf.animations[0]).play()``.
 """
 
@@ -20,6 +22,14 @@ from visemeface.export.sinks import Sink, register
 from visemeface.face.mesh import vertex_normals
 from visemeface.muscles.morphs import JAW_SAMPLES, jaw_sample_weights, morph_weights, rig_morph_targets  # noqa: F401
 from visemeface.outputs import atomic_output
+
+
+def srgb_to_linear(c: np.ndarray) -> np.ndarray:
+    r"""Display (sRGB-encoded) colour values in 0..1 -> linear ones, as glTF's ``COLOR_0`` holds them
+    (IEC 61966-2-1): :math:`c/12.92` for :math:`c \le 0.04045`, else :math:`((c + 0.055)/1.055)^{2.4}`.
+    Alpha is not encoded: give RGB only."""
+    c = np.clip(np.asarray(c, dtype=np.float64), 0.0, 1.0)
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
 def unit_normals(normals: np.ndarray) -> np.ndarray:
@@ -88,11 +98,32 @@ def glb_bytes(gltf: dict, binary: bytes) -> bytes:
             + struct.pack("<I4s", len(binary), b"BIN\0") + binary)
 
 
+def linear_colours(colors) -> np.ndarray:
+    """Display colours (floats in 0..1 or uint8; RGB or RGBA) -> glTF's linear floats (alpha kept)."""
+    c = np.asarray(colors)
+    c = c / 255.0 if np.issubdtype(c.dtype, np.integer) else c
+    c = np.clip(c.astype(np.float64), 0.0, 1.0)
+    c[:, :3] = srgb_to_linear(c[:, :3])
+    return c
+
+
+def _check_animation(n: int, tg: np.ndarray, target_names, t: np.ndarray, w: np.ndarray) -> None:
+    k = len(tg)
+    if k == 0 or tg.shape != (k, n, 3) or len(target_names) != k:
+        raise ValueError(f"targets must be (K >= 1, {n}, 3) with K names")
+    if w.shape != (len(t), k):
+        raise ValueError(f"weights must be ({len(t)}, {k}), got {w.shape}")
+    if len(t) == 0 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
+        raise ValueError("keyframe times must be finite and increasing")
+    if not (np.all(np.isfinite(w)) and np.all(np.isfinite(tg))):
+        raise ValueError("morph targets and weights must be finite")
+
+
 def write_morph_animation_glb(path, vertices: np.ndarray, triangles: np.ndarray,
                               targets: np.ndarray, target_names: Sequence[str],
                               times: np.ndarray, weights: np.ndarray,
                               colors: np.ndarray | None = None, normals: np.ndarray | None = None,
-                              name: str = "face",
+                              name: str = "face", extras: dict | None = None,
                               force: bool = False) -> None:
     r"""Write a mesh with morph targets and a morph-weight animation as binary glTF 2.0.
 
@@ -123,11 +154,15 @@ def write_morph_animation_glb(path, vertices: np.ndarray, triangles: np.ndarray,
     weights : (F, K) float
         Morph weights per keyframe.
     colors : (N, 3) or (N, 4), optional
-        Vertex colours (floats in 0..1 or uint8), exported as ``COLOR_0``.
+        Display (sRGB) vertex colours (floats in 0..1 or uint8), exported as ``COLOR_0`` in the linear
+        values glTF defines (:func:`srgb_to_linear`; alpha kept).
     normals : (N, 3), optional
         Rest vertex normals (default: area-weighted, :func:`visemeface.face.mesh.vertex_normals`).
         Morph targets carry no normal deltas: viewers shade the moving face
         with the rest normals (a small shading error, no geometric one).
+    extras : dict, optional
+        JSON-able facts about the animation (frame rate, source), stored in ``asset.extras`` and the
+        scene's and animation's ``extras`` (Blender keeps the scene's as custom properties).
     force : bool
         Replace an existing file.
     """
@@ -137,14 +172,7 @@ def write_morph_animation_glb(path, vertices: np.ndarray, triangles: np.ndarray,
     t = np.asarray(times, dtype=np.float64)
     w = np.asarray(weights, dtype=np.float64)
     n, k = len(x), len(tg)
-    if k == 0 or tg.shape != (k, n, 3) or len(target_names) != k:
-        raise ValueError(f"targets must be (K >= 1, {n}, 3) with K names")
-    if w.shape != (len(t), k):
-        raise ValueError(f"weights must be ({len(t)}, {k}), got {w.shape}")
-    if len(t) == 0 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
-        raise ValueError("keyframe times must be finite and increasing")
-    if not (np.all(np.isfinite(w)) and np.all(np.isfinite(tg))):
-        raise ValueError("morph targets and weights must be finite")
+    _check_animation(n, tg, target_names, t, w)
 
     buf = _GlbBuffer()
     attrs = {
@@ -153,11 +181,8 @@ def write_morph_animation_glb(path, vertices: np.ndarray, triangles: np.ndarray,
                           .astype("<f4"), "VEC3", _ARRAY_BUFFER),
     }
     if colors is not None:
-        c = np.asarray(colors)
-        c = c / 255.0 if np.issubdtype(c.dtype, np.integer) else c
-        c = np.clip(c.astype(np.float64), 0.0, 1.0)
-        attrs["COLOR_0"] = buf.add(c.astype("<f4"), "VEC4" if c.shape[1] == 4 else "VEC3",
-                                   _ARRAY_BUFFER)
+        c = linear_colours(colors)
+        attrs["COLOR_0"] = buf.add(c.astype("<f4"), "VEC4" if c.shape[1] == 4 else "VEC3", _ARRAY_BUFFER)
     idx_dtype = "<u2" if n <= 65535 else "<u4"
     indices = buf.add(tri.ravel().astype(idx_dtype), "SCALAR", _ELEMENT_ARRAY_BUFFER)
     target_refs = [{"POSITION": buf.add(tg[i].astype("<f4"), "VEC3", _ARRAY_BUFFER)}
@@ -165,10 +190,13 @@ def write_morph_animation_glb(path, vertices: np.ndarray, triangles: np.ndarray,
     t_in = buf.add(t.astype("<f4"), "SCALAR")
     w_out = buf.add(w.astype("<f4").ravel(), "SCALAR")
 
+    from visemeface import __version__
+
+    extras = dict(extras or {})
     gltf = {
-        "asset": {"version": "2.0", "generator": "visemeface"},
+        "asset": {"version": "2.0", "generator": f"visemeface {__version__}", **({"extras": extras} if extras else {})},
         "scene": 0,
-        "scenes": [{"nodes": [0]}],
+        "scenes": [{"nodes": [0], **({"extras": extras} if extras else {})}],
         "nodes": [{"mesh": 0, "name": name}],
         "materials": [{"name": "skin", "pbrMetallicRoughness": {
             "baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0,
@@ -177,7 +205,7 @@ def write_morph_animation_glb(path, vertices: np.ndarray, triangles: np.ndarray,
             "attributes": attrs, "indices": indices, "material": 0, "mode": 4,
             "targets": target_refs}],
             "weights": [0.0] * k, "extras": {"targetNames": list(map(str, target_names))}}],
-        "animations": [{"name": "speech", "channels": [
+        "animations": [{"name": "speech", **({"extras": extras} if extras else {}), "channels": [
             {"sampler": 0, "target": {"node": 0, "path": "weights"}}],
             "samplers": [{"input": t_in, "output": w_out, "interpolation": "LINEAR"}]}],
         "buffers": [{"byteLength": buf.offset}],
@@ -190,35 +218,88 @@ def write_morph_animation_glb(path, vertices: np.ndarray, triangles: np.ndarray,
 
 
 def write_rig_animation(path, rig, activations: np.ndarray, times: np.ndarray, force: bool = False,
-                        jaw_samples: int = JAW_SAMPLES) -> None:
+                        jaw_samples: int = JAW_SAMPLES, extras: dict | None = None) -> None:
     """Write the rig's face with its morph targets and activations (F, M) at ``times`` as a .glb."""
     targets, names, samples = rig_morph_targets(rig, jaw_samples)
     face = rig.face
     write_morph_animation_glb(path, face.vertices, face.triangles, targets, names, times,
                               morph_weights(activations, rig, samples), colors=face.vertex_colors(),
-                              normals=face.vertex_normals(), force=force)
+                              normals=face.vertex_normals(), extras=extras, force=force)
+
+
+#: ``--gltf-shapes`` choices: the rig's own functions, or a retargeting vocabulary fitted per frame.
+SHAPE_SETS = ("muscles", "arkit", "vrm", "oculus")
 
 
 @register
 class GltfSink(Sink):
-    """The rig's face with one morph target per muscle and the track as a morph-weight animation.
+    """The rig's face with morph targets and the motion as a morph-weight animation.
 
-    Keyframes are the track's rows (one a frame, LINEAR between them); the
-    track's last row lies up to one frame before the end of the utterance, so a
-    final keyframe holding the last pose is added at ``end_time``.
+    ``--gltf-shapes muscles`` (default): one morph target per muscle and sampled jaw targets, weights
+    from the activation track (exact up to the jaw's chord sag). ``arkit`` (or ``vrm``, ``oculus``): the
+    vocabulary's shapes named as the client expects (``jawOpen``, ...), weights fitted to each frame
+    (:mod:`visemeface.retarget`). Keyframes are the frames (one a frame, LINEAR between them); the last
+    frame lies up to one frame before the end of the utterance, so a final keyframe holding the last
+    pose is added at ``end_time`` (``extras.heldLastKey``). ``asset.extras`` (and the scene's and the
+    animation's) hold ``fps``, ``frames``, ``source``: set a client's scene to ``fps`` before importing.
     """
 
     name = "gltf"
     metavar = "FILE.glb"
-    help = ("also write binary glTF: the face, one morph target per muscle, the jaw as sampled morphs, "
-            "the track as a morph-weight animation")
+    help = ("also write binary glTF: the face with morph targets (muscles and sampled jaw, or --gltf-shapes) "
+            "and the motion as a morph-weight animation")
     suffixes = (".glb",)
+    arguments = ((("--gltf-shapes",), dict(dest="gltf_shapes", choices=SHAPE_SETS, default="muscles",
+                                           help="morph targets of --gltf: the rig's muscles (default) or "
+                                           "ARKit/VRM/Oculus shapes with per-frame fitted weights")),)
+
+    @property
+    def shapes(self) -> str:
+        return self.settings.get("gltf_shapes") or "muscles"
+
+    def open(self, run) -> None:
+        super().open(run)
+        self.times, self.weights = [], []
+        if self.shapes != "muscles":
+            from visemeface.retarget import ShapeFit, moving_vertices, vocabulary
+
+            self.vocab = vocabulary(self.shapes, run.rig)
+            self.fit = ShapeFit(self.vocab, moving_vertices(run.rig))
+            self.rest = np.asarray(run.face.vertices, dtype=np.float64)
+
+    def write(self, frame) -> None:
+        if self.shapes != "muscles":
+            self.times.append(frame.time)
+            self.weights.append(self.fit.frame(np.asarray(frame.vertices, dtype=np.float64) - self.rest)[0])
 
     def close(self) -> None:
-        run = self.run
-        a = run.rig.clamp(run.rig.track_matrix(run.track))
+        fitted = None
+        if self.shapes != "muscles":
+            fitted = (self.vocab, np.array(self.times, dtype=np.float64),
+                      np.array(self.weights).reshape(len(self.weights), len(self.vocab.names)))
+        write_run_glb(self.tmp[0], self.run, self.shapes, fitted)
+
+
+def write_run_glb(path, run, shapes: str = "muscles", fitted=None) -> None:
+    """A run's (:class:`~visemeface.export.sinks.RunInfo`) animation as a .glb, with a held last key at
+    ``run.end_time`` and the run's facts in the extras (:class:`GltfSink`).
+
+    ``fitted``: (vocabulary, frame times, (F, K) weights) for ``shapes`` other than ``muscles``.
+    """
+    if shapes == "muscles":
+        w = run.rig.clamp(run.rig.track_matrix(run.track))
         times = run.track.index.to_numpy(dtype=np.float64)
-        if run.end_time is not None and run.end_time > times[-1] + 1e-6:
-            times = np.append(times, run.end_time)
-            a = np.vstack([a, a[-1:]])
-        write_rig_animation(self.tmp[0], run.rig, a, times, force=True)
+    else:
+        vocab, times, w = fitted
+    held = run.end_time is not None and run.end_time > times[-1] + 1e-6
+    if held:
+        times = np.append(times, run.end_time)
+        w = np.vstack([w, w[-1:]])
+    extras = {"fps": run.fps, "frames": run.n_frames, "keyframes": len(times), "heldLastKey": bool(held),
+              "shapes": shapes, "source": str(run.extra.get("source", "")), "interp": str(run.extra.get("interp", ""))}
+    if shapes == "muscles":
+        write_rig_animation(path, run.rig, w, times, force=True, extras=extras)
+        return
+    face = run.face
+    write_morph_animation_glb(path, face.vertices, face.triangles, vocab.shapes, vocab.names, times, w,
+                              colors=face.vertex_colors(), normals=face.vertex_normals(), extras=extras, force=True)

@@ -5,7 +5,10 @@
     float32 xyz[num_samples][num_points][3]
 
 (little-endian). ``sample_rate`` is the *interval* between samples in frames
-(1.0 = one sample a frame); the frame rate itself is not stored. The header is
+(1.0 = one sample a frame); the frame rate itself is not stored. Blender: import
+``frame_000000.obj`` of ``--obj`` (default importer settings; the legacy importer needs
+*Keep Vert Order*), add a Mesh Cache modifier (PC2) and leave its axes at their defaults:
+0.0005 mm from the OBJ frames (tests/export/test_clients.py). The header is
 written first with ``num_samples = 0`` and patched when the writer closes, so
 frames stream to disk.
 """

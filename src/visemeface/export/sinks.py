@@ -90,6 +90,12 @@ class Sink:
     suffixes: ClassVar[tuple[str, ...]] = ()
     folder: ClassVar[bool] = False
     needs_image: ClassVar[bool] = False
+    #: A suffix (".html") lets the option be given without a path: the output goes beside the video
+    #: (its name with this suffix).
+    beside_video: ClassVar[str] = ""
+    #: More options of this sink: ``((flag, ...), argparse keywords with a "dest")``; their values reach
+    #: the sink as ``settings[dest]``.
+    arguments: ClassVar[tuple] = ()
 
     def __init__(self, path, force: bool = False, **settings):
         self.path = Path(path)
@@ -152,19 +158,31 @@ def add_sink_arguments(group: argparse._ActionsContainer, skip: tuple[str, ...] 
     for name, cls in SINKS.items():
         if name in skip:
             continue
+        more = dict(nargs="?", const=BESIDE_VIDEO) if cls.beside_video else {}
         group.add_argument(option_of(cls), *cls.aliases, dest=dest_of(cls), type=Path, metavar=cls.metavar,
-                           help=cls.help)
+                           help=cls.help, **more)
+        for flags, kw in cls.arguments:
+            group.add_argument(*flags, **kw)
 
 
-def sinks_from_args(args, force: bool, skip: tuple[str, ...] = (), **settings) -> list[Sink]:
-    """The sinks the user asked for with :func:`add_sink_arguments`'s options."""
+#: The value of a ``beside_video`` sink's option given without a path.
+BESIDE_VIDEO = Path("<beside the video>")
+
+
+def sinks_from_args(args, force: bool, skip: tuple[str, ...] = (), video: Path | None = None,
+                    **settings) -> list[Sink]:
+    """The sinks the user asked for with :func:`add_sink_arguments`'s options (``video``: the video's
+    path, where a ``beside_video`` sink given without a path writes)."""
     out = []
     for name, cls in SINKS.items():
         if name in skip:
             continue
         path = getattr(args, dest_of(cls), None)
+        if path == BESIDE_VIDEO:
+            path = Path(video).with_suffix(cls.beside_video)
         if path is not None:
-            out.append(cls(path, force=force, **settings))
+            own = {kw["dest"]: getattr(args, kw["dest"], kw.get("default")) for _, kw in cls.arguments}
+            out.append(cls(path, force=force, **settings, **own))
     return out
 
 

@@ -1,0 +1,132 @@
+"""Rhubarb, Live Link and the weight files: the formats as their documentation shows them."""
+
+import csv
+import json
+import xml.etree.ElementTree as ET
+
+import pandas as pd
+import pytest
+
+from visemeface.cli import main
+from visemeface.export.retarget import live_link_timecode
+from visemeface.export.rhubarb import dat_text, json_text, tsv_text, xml_text
+from visemeface.retarget.classes import mouth_cues
+
+from test_retarget import ARKIT
+
+#: Rhubarb's README: a person saying 'Hi' (TSV, XML and JSON of the same recording).
+HI = [(0.00, 0.05, "X"), (0.05, 0.27, "D"), (0.27, 0.31, "C"), (0.31, 0.43, "B"), (0.43, 0.47, "X")]
+HI_SOUND = "C:\\Users\\Daniel\\Desktop\\av\\hi\\hi.wav"
+HI_TSV = "0.00\tX\n0.05\tD\n0.27\tC\n0.31\tB\n0.43\tX\n0.47\tX\n"
+HI_XML = """<?xml version="1.0" encoding="utf-8"?>
+<rhubarbResult>
+  <metadata>
+    <soundFile>C:\\Users\\Daniel\\Desktop\\av\\hi\\hi.wav</soundFile>
+    <duration>0.47</duration>
+  </metadata>
+  <mouthCues>
+    <mouthCue start="0.00" end="0.05">X</mouthCue>
+    <mouthCue start="0.05" end="0.27">D</mouthCue>
+    <mouthCue start="0.27" end="0.31">C</mouthCue>
+    <mouthCue start="0.31" end="0.43">B</mouthCue>
+    <mouthCue start="0.43" end="0.47">X</mouthCue>
+  </mouthCues>
+</rhubarbResult>
+"""
+HI_JSON = """{
+  "metadata": {
+    "soundFile": "C:\\\\Users\\\\Daniel\\\\Desktop\\\\av\\\\hi\\\\hi.wav",
+    "duration": 0.47
+  },
+  "mouthCues": [
+    { "start": 0.00, "end": 0.05, "value": "X" },
+    { "start": 0.05, "end": 0.27, "value": "D" },
+    { "start": 0.27, "end": 0.31, "value": "C" },
+    { "start": 0.31, "end": 0.43, "value": "B" },
+    { "start": 0.43, "end": 0.47, "value": "X" }
+  ]
+}
+"""
+
+
+def test_rhubarb_writers_reproduce_rhubarbs_documented_example():
+    assert tsv_text(HI, 0.47) == HI_TSV
+    assert xml_text(HI, 0.47, HI_SOUND) == HI_XML
+    assert json_text(HI, 0.47, HI_SOUND) == HI_JSON
+    doc = json.loads(json_text(HI, 0.47, HI_SOUND))
+    assert [(c["start"], c["end"], c["value"]) for c in doc["mouthCues"]] == HI
+    root = ET.fromstring(xml_text(HI, 0.47, HI_SOUND))
+    assert [(float(c.get("start")), float(c.get("end")), c.text) for c in root.iter("mouthCue")] == HI
+
+
+def test_dat_frames_count_from_one_at_the_dat_rate():
+    assert dat_text(HI) == "MohoSwitch1\n1 X\n2 D\n7 C\n8 B\n11 X\n"        # 1 + int(24 t)
+    assert dat_text(HI, fps=100, preston_blair=True) == "MohoSwitch1\n1 rest\n6 AI\n28 E\n32 etc\n44 rest\n"
+    # two cues on one frame: the later one is shown
+    assert dat_text([(0.0, 0.01, "X"), (0.01, 0.5, "A")], fps=24) == "MohoSwitch1\n1 A\n"
+
+
+def test_mouth_cues_merge_neighbours_and_cover_the_utterance():
+    seg = pd.DataFrame({"start": [0.0, 0.1, 0.2, 0.255, 0.4], "end": [0.1, 0.2, 0.255, 0.4, 0.6],
+                        "phoneme": ["_", "m", "b", "aa", "_"]})
+    assert mouth_cues(seg) == [(0.0, 0.1, "X"), (0.1, 0.25, "A"), (0.25, 0.4, "D"), (0.4, 0.6, "X")]
+
+
+def test_live_link_timecode():
+    assert live_link_timecode(0.0, 30) == "00:00:00:00.000"
+    assert live_link_timecode(1.5, 30) == "00:00:01:15.000"
+    assert live_link_timecode(3661.25, 24) == "01:01:01:06.000"
+    assert live_link_timecode(0.01, 60) == "00:00:00:00.600"
+
+
+def test_live_link_csv_has_its_exact_header_and_a_row_a_frame(exported):
+    with open(exported / "ll.csv", newline="") as fh:
+        rows = list(csv.reader(fh))
+    head = rows[0]
+    rot = ["HeadYaw", "HeadPitch", "HeadRoll", "LeftEyeYaw", "LeftEyePitch", "LeftEyeRoll",
+           "RightEyeYaw", "RightEyePitch", "RightEyeRoll"]
+    assert head == ["Timecode", "BlendShapeCount"] + [n[0].upper() + n[1:] for n in ARKIT] + rot
+    assert head[2:5] == ["EyeBlinkLeft", "EyeLookDownLeft", "EyeLookInLeft"]
+    frames = len(pd.read_csv(exported / "t.csv", comment="#"))
+    assert len(rows) - 1 == frames
+    assert rows[1][0] == "00:00:00:00.000" and rows[31][0] == "00:00:01:00.000"
+    for r in rows[1:]:
+        assert r[1] == "61" and all(0.0 <= float(x) <= 1.0 for x in r[2:54]) and set(r[54:]) == {"0"}
+    jaw = [float(r[head.index("JawOpen")]) for r in rows[1:]]
+    assert max(jaw) > 0.3                                                # "five" opens the jaw
+
+
+def test_weight_files_parse_back(exported):
+    doc = json.loads((exported / "a.json").read_text())
+    assert doc["names"] == ARKIT and doc["vocabulary"] == "arkit" and doc["fps"] == 30
+    assert len(doc["weights"]) == len(doc["time"]) == len(pd.read_csv(exported / "t.csv", comment="#"))
+    oc = pd.read_csv(exported / "o.csv")
+    assert list(oc.columns[2:]) == "sil PP FF TH DD kk CH SS nn RR aa E ih oh ou".split()
+    assert (oc.iloc[:, 2:].sum(axis=1) - 1).abs().max() < 5e-3
+    vrm = pd.read_csv(exported / "v.csv")
+    assert {"aa", "ih", "ou", "ee", "oh", "blink", "happy", "surprised"} <= set(vrm.columns)
+    assert vrm["blink"].eq(0).all() and vrm[["aa", "oh", "ou"]].to_numpy().max() > 0.3
+
+
+def test_rhubarb_json_of_a_run(exported):
+    doc = json.loads((exported / "r.json").read_text())
+    cues = doc["mouthCues"]
+    assert cues[0]["start"] == 0 and cues[-1]["end"] == doc["metadata"]["duration"]
+    assert all(a["end"] == b["start"] for a, b in zip(cues, cues[1:]))
+    assert all(a["value"] != b["value"] for a, b in zip(cues, cues[1:]))
+    assert {c["value"] for c in cues} <= set("ABCDEFGHX") and doc["metadata"]["soundFile"].endswith("a.wav")
+
+
+@pytest.mark.parametrize("extra,message", [
+    (["--rhubarb", "r.txt"], "must end in .tsv or .json or .xml or .dat"),
+    (["--rhubarb", "r.dat", "--dat-fps", "0"], "--dat-fps: must be a frame rate"),
+    (["--livelink", "l.json"], "must end in .csv"),
+    (["--gltf", "g.glb", "--gltf-shapes", "arkitt"], "invalid choice"),
+])
+def test_bad_export_options_are_refused_before_work(tmp_path, capsys, monkeypatch, extra, message):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "s.txt").write_text("hi\n")
+    assert main(["speak", "s.txt", "--no-video", "-q"] + extra) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.txt"]
