@@ -27,7 +27,7 @@ def readme_commands():
     text = (ROOT / "README.md").read_text(encoding="utf-8")
     commands = []
     for block in re.findall(r"```bash\n(.*?)```", text, flags=re.S):
-        for line in block.splitlines():
+        for line in block.replace("\\\n", " ").splitlines():       # continuation lines joined
             argv = shlex.split(line, comments=True)
             if argv and argv[0].endswith("visemeface"):
                 commands.append(argv[1:])
@@ -39,7 +39,8 @@ def _outputs(argv):
     outs = set()
     for opt, value in zip(argv, argv[1:]):
         if opt in ("-o", "--output", "--export", "--frames", "--obj", "--pc2", "--gltf", "--track", "--measures",
-                   "--plot", "--overlay", "--camera-json"):
+                   "--plot", "--overlay", "--camera-json", "--arkit", "--livelink", "--vrm", "--oculus",
+                   "--rhubarb", "--preview"):
             outs.add(value)
     video = {"-o", "--output", "--no-video"} & set(argv)
     if argv[0] in ("speak", "say") and not video:           # the default video: TRANSCRIPT.mp4 or say.mp4
