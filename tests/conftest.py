@@ -73,10 +73,10 @@ def fem_face(default_face):
 FUZZ_COUNTS: dict[str, dict[str, int]] = {}
 
 
-def record_fuzz(reader: str, outcome: str) -> None:
-    """Count one fuzz case of ``reader``: "read", "refused" (one-line InputError) or "crashed"."""
-    counts = FUZZ_COUNTS.setdefault(reader, {"read": 0, "refused": 0, "crashed": 0})
-    counts[outcome] += 1
+@pytest.fixture(scope="session")
+def fuzz_counts():
+    """The session's fuzz case counts (tests/fuzz fills it; printed at the end of the run)."""
+    return FUZZ_COUNTS
 
 
 def pytest_terminal_summary(terminalreporter):

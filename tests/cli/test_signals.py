@@ -99,9 +99,9 @@ KINEMATIC = {
 
 
 def _kinematic(work, command, tag, *more):
-    from conftest import ROOT
+    from visemeface.resources import transcripts_path
 
-    head = [a.format(transcript=ROOT / "transcripts" / "bob_moves_five_boats_long.TextGrid")
+    head = [a.format(transcript=transcripts_path("bob_moves_five_boats_long.TextGrid"))
             for a in KINEMATIC[command]]
     argv = [sys.executable, "-m", "visemeface", *head, "--fps", "120", "--size", "64", "--msaa", "0", "-q",
             "-o", f"{tag}.mp4", "--frames", f"{tag}_fr", "--pc2", f"{tag}.pc2", "--measures", f"{tag}.csv", *more]

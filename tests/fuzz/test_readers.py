@@ -24,7 +24,21 @@ from hypothesis import strategies as st
 
 from visemeface.errors import InputError
 
-from conftest import ROOT, record_fuzz
+ROOT = Path(__file__).resolve().parents[2]
+_COUNTS: dict = {}
+
+
+@pytest.fixture(autouse=True)
+def _counts(fuzz_counts):
+    """Count into the session's table (printed by conftest's terminal summary)."""
+    global _COUNTS
+    _COUNTS = fuzz_counts
+
+
+def record_fuzz(reader: str, outcome: str) -> None:
+    """Count one case of ``reader``: "read", "refused" (one-line InputError) or "crashed"."""
+    counts = _COUNTS.setdefault(reader, {"read": 0, "refused": 0, "crashed": 0})
+    counts[outcome] += 1
 
 TOKENS = [b"nan", b"NaN", b"inf", b"-inf", b"1e309", b"-1", b"0", b"-0.0", b"1e-320", b"99999999999999999999",
           b"", b"\x00", b"\xff\xfe", b"\xe9", b"\n", b"\r\n", b",", b";", b"\t", b" ", b'"', b"[", b"]", b"{",
