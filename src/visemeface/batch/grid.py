@@ -9,6 +9,7 @@ sentence's clip id is its six initials with the digit as a numeral
 
 from __future__ import annotations
 
+import functools
 import tomllib
 from pathlib import Path
 
@@ -20,12 +21,13 @@ from visemeface.errors import InputError
 SLOTS = ("command", "colour", "preposition", "letter", "digit", "adverb")
 
 
-def grammar() -> dict[str, list[str]]:
-    """The GRID grammar: slot -> its words (``data/corpora/grid.toml``)."""
+@functools.lru_cache(maxsize=1)
+def grammar() -> dict[str, tuple[str, ...]]:
+    """The GRID grammar: slot -> its words (``data/corpora/grid.toml``, read once)."""
     from visemeface.resources import data_path
 
     data = tomllib.loads(data_path("corpora", "grid.toml").read_text())
-    return {slot: list(data[slot]) for slot in SLOTS}
+    return {slot: tuple(data[slot]) for slot in SLOTS}
 
 
 def n_sentences() -> int:
