@@ -12,9 +12,9 @@ Each good job is one Dask task (:func:`visemeface.batch.clip.make_clip`):
   (``batch_report.csv``: clip, status, seconds, error) and the others go on.
 
 Without a client a :class:`distributed.LocalCluster` is started on this
-machine: ``workers`` processes (default: the CPU count), one thread each, no
-dashboard, numba capped at one thread per task, so the workers do not
-oversubscribe the cores.
+machine: ``workers`` processes (default: the CPU count), one thread each, on
+free ports (several batches can run side by side), numba capped at one thread
+per task, so the workers do not oversubscribe the cores.
 """
 
 from __future__ import annotations
@@ -56,7 +56,7 @@ def local_client(workers: int | None = None):
     from distributed import Client, LocalCluster
 
     n = workers or os.cpu_count() or 1
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
+    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0")
     return Client(cluster)
 
 
