@@ -100,19 +100,32 @@ def _make(job: Job, folder: Path, force: bool) -> int:
     return stats.frames
 
 
+#: Mesa's software rasteriser (llvmpipe) starts a thread per core for each GL context unless told.
+RASTER_THREADS = ("LP_NUM_THREADS", "1")
+
+
+def _one_thread_per_worker() -> None:
+    """Cap the worker's compute threads at one: numba (:func:`visemeface.runtime.configure`) and Mesa's
+    llvmpipe (read when the first GL context is made), unless the user set them."""
+    import os
+
+    from visemeface.runtime import configure
+
+    configure(threads=1)
+    os.environ.setdefault(*RASTER_THREADS)
+
+
 def make_clip(job: Job, outdir: str, force: bool = False) -> dict:
     """Make one clip (the task a Dask worker runs); returns its report row.
 
     Never raises for a bad clip: bad input is status ``error``, anything else
     ``failed``, with the reason on one line. A clip already made with the same
     settings is ``skipped`` (unless ``force``); one made with other settings is
-    an error unless ``force``. The worker's numba threads are capped at one
-    (:func:`visemeface.runtime.configure`), so N workers use N cores.
+    an error unless ``force``. The worker's threads are capped at one
+    (:func:`_one_thread_per_worker`), so N workers use N cores.
     """
-    from visemeface.runtime import configure
-
     t0 = time.perf_counter()
-    configure(threads=1)
+    _one_thread_per_worker()
     folder = Path(outdir) / job.clip
     status, message = "done", ""
     with warnings.catch_warnings(record=True) as caught:
