@@ -102,9 +102,11 @@ def test_resume_after_an_interrupted_batch_does_only_the_missing_clips(client, t
         time.sleep(0.2)
     assert not _temporaries(out)
     report = {r["clip"]: r["status"] for r in read_report(out / REPORT)}
-    assert list(report.values()).count("done") >= 2 and "failed" in report.values()   # "not run (interrupted)"
     made = {p.name: (p / "clip.json").stat().st_mtime_ns for p in out.iterdir() if p.is_dir()}
     assert 2 <= len(made) < 8
+    # clips still running when the report was written finish after it (the cluster is not ours to stop)
+    assert {c for c, s in report.items() if s == "done"} <= set(made)
+    assert {c for c, s in report.items() if s == "failed"} >= set(report) - set(made)
 
     rows = run(jobs, out, client=client, resume=True, show_progress=False)
     status = {r["clip"]: r["status"] for r in rows}

@@ -110,9 +110,15 @@ def run(jobs, outdir, client=None, workers: int | None = None, resume: bool = Fa
         if todo:
             _submit(todo, outdir, client, workers, force, show_progress, rows, on_result)
     finally:
-        write_report(outdir / REPORT, [rows.get(i) or report_row(j.clip, "failed", 0.0, "not run (interrupted)")
-                                       for i, j in enumerate(jobs)])
+        write_report(outdir / REPORT, [rows.get(i) or _unfinished(j, outdir) for i, j in enumerate(jobs)])
     return [rows[i] for i in range(len(jobs))]
+
+
+def _unfinished(job: Job, outdir: Path) -> dict:
+    """The report row of a clip whose result never came back (the batch was interrupted)."""
+    if clip_state(job, outdir) == "done":       # finished while the batch was being stopped
+        return report_row(job.clip, "done", 0.0)
+    return report_row(job.clip, "failed", 0.0, "not made: the batch was interrupted")
 
 
 def _submit(todo, outdir: Path, client, workers, force, show_progress, rows, on_result) -> None:
