@@ -158,12 +158,13 @@ def test_a_worker_killed_mid_clip_loses_no_clip_and_leaves_no_partial_file(tmp_p
     def kill_a_busy_worker(row):
         if killed:
             return
-        deadline = time.monotonic() + 30
+        deadline, busy = time.monotonic() + 30, {}
         while time.monotonic() < deadline:
             busy = {w: keys for w, keys in c.processing().items() if keys}
             if busy:
                 break
             time.sleep(0.01)
+        assert busy, "no worker was busy"
         worker, keys = next(iter(busy.items()))
         pid = c.run(os.getpid, workers=[worker])[worker]
         os.kill(pid, signal.SIGKILL)
