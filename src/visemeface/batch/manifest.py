@@ -34,6 +34,8 @@ COLUMNS = ("clip", "transcript", "text", "audio", "emotion", "physics", "fps", "
            "interp", "rate", "outputs")
 #: A clip id: a file name that is not hidden, has no separators and is at most this long.
 CLIP_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,99}$")
+#: Names in the output folder that are not clips.
+RESERVED = ("batch_report.csv",)
 
 
 @dataclass(frozen=True)
@@ -189,6 +191,8 @@ def read_manifest(path, settings: dict | None = None) -> list[Job | BadRow]:
             if not CLIP_ID.match(clip):
                 raise InputError(f"bad clip id {clip!r}: 1-100 letters, digits, '.', '_' or '-', "
                                  "not starting with '.', '_' or '-'")
+            if clip in RESERVED:
+                raise InputError(f"clip id {clip!r} is the name of the batch's report")
             if clip in seen:
                 raise InputError(f"clip id {clip!r} repeats line {seen[clip]}")
             seen[clip] = line

@@ -26,11 +26,11 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 
 from visemeface.batch.clip import clip_state, make_clip, report_row
-from visemeface.batch.manifest import BadRow, Job, read_manifest
+from visemeface.batch.manifest import RESERVED, BadRow, Job, read_manifest
 from visemeface.errors import InputError
 
 #: The report's file name in the output folder, and its columns.
-REPORT = "batch_report.csv"
+REPORT = RESERVED[0]
 REPORT_COLUMNS = ("clip", "status", "seconds", "error")
 
 
