@@ -184,3 +184,16 @@ def test_a_worker_killed_mid_clip_loses_no_clip_and_leaves_no_partial_file(tmp_p
     for i in range(8):
         _check_clip(out / f"c{i}")
     assert sorted(p.name for p in out.iterdir()) == sorted([REPORT] + [f"c{i}" for i in range(8)])
+
+
+@pytest.mark.slow
+def test_without_a_client_a_local_cluster_is_started_and_closed(tmp_path):
+    import psutil
+
+    before = {p.pid for p in psutil.Process().children(recursive=True)}
+    rows = run(_jobs(tmp_path, 1), tmp_path / "out", workers=2, show_progress=False)
+    assert [r["status"] for r in rows] == ["done"]          # one clip: one worker was started, not two
+    _check_clip(tmp_path / "out" / "c0")
+    left = [p for p in psutil.Process().children(recursive=True) if p.pid not in before and p.is_running()
+            and p.status() != psutil.STATUS_ZOMBIE and "resource_tracker" not in " ".join(p.cmdline())]
+    assert not left, [p.cmdline() for p in left]
