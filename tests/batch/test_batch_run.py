@@ -143,9 +143,24 @@ def test_cli_on_a_running_scheduler_reports_each_bad_clip_on_one_line(client, tm
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["batch_report.csv", "c0", "c1"]
     assert main(argv) == 2                                # not empty: needs --resume or --force
     assert "use --resume" in capsys.readouterr().err
+    (tmp_path / "scheduler.json").write_text(json.dumps({"address": client.scheduler.address}))
+    argv[argv.index("--scheduler") + 1] = "scheduler.json"  # the same scheduler through its scheduler file
     assert main(argv + ["--resume"]) == 1                 # the bad row is still bad; nothing remade
     statuses = [r["status"] for r in read_report(tmp_path / "out" / REPORT)]
     assert statuses == ["skipped", "skipped", "error"]
+
+
+def test_cli_refuses_a_scheduler_that_is_neither_an_address_nor_a_scheduler_file(tmp_path, monkeypatch, capsys):
+    from visemeface.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "jobs.csv").write_text("clip,text\nc0,bin blue\n")
+    (tmp_path / "junk.json").write_text("{}")
+    for target, message in (("head-node", "must be a Dask scheduler address"), ("junk.json", "not a Dask scheduler file")):
+        assert main(["batch", "jobs.csv", "-o", "out", "--scheduler", target]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and message in err
+    assert not (tmp_path / "out").exists()
 
 
 @pytest.mark.slow

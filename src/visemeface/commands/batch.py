@@ -110,17 +110,30 @@ def _client(args):
     from distributed import Client
 
     target = args.scheduler
-    if _ADDRESS.match(target):
-        kw = {"address": target}
-    elif Path(target).is_file():
-        kw = {"scheduler_file": target}
-    else:
-        raise InputError(f"--scheduler must be a Dask scheduler address (tcp://host:8786) or an existing "
-                         f"scheduler file, got {target!r}")
+    if not _ADDRESS.match(target):
+        if not Path(target).is_file():
+            raise InputError(f"--scheduler must be a Dask scheduler address (tcp://host:8786) or an existing "
+                             f"scheduler file, got {target!r}")
+        target = _address_in(Path(target))
     try:
-        return Client(timeout="10s", **kw)
+        return Client(target, timeout="10s")
     except (OSError, TimeoutError, ValueError) as e:
         raise InputError(f"cannot reach the Dask scheduler at {target} ({str(e).splitlines()[0]})") from None
+
+
+def _address_in(path: Path) -> str:
+    """The scheduler's address in a Dask scheduler file (``dask scheduler --scheduler-file``)."""
+    import json
+
+    from visemeface.errors import InputError
+
+    try:
+        address = json.loads(path.read_text()).get("address")
+    except (OSError, ValueError, AttributeError):
+        address = None
+    if not isinstance(address, str) or not _ADDRESS.match(address):
+        raise InputError("not a Dask scheduler file (a JSON object with the scheduler's address)", path)
+    return address
 
 
 def _settings(args) -> dict:
