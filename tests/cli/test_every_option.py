@@ -28,6 +28,7 @@ BASE = {
     "analyze": ["frames", "--box", "2,4,12,6", "-o", "a.csv"],
     "compare": ["p1.csv", "p2.csv"],
     "preview": ["a.glb"],
+    "batch": ["jobs.csv", "-o", "out"],
 }
 #: Options that take no invalid value, with the reason.
 FREE = {}
@@ -70,6 +71,7 @@ def prepared(tmp_path_factory):
 
     root = tmp_path_factory.mktemp("inputs")
     (root / "t.txt").write_text(TINY)
+    (root / "jobs.csv").write_text("clip,transcript\nc1,t.txt\n")
     (root / "frames").mkdir()
     for i in range(3):
         write_png(root / "frames" / f"f{i}.png", np.full((16, 16, 3), 200, np.uint8))

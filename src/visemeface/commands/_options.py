@@ -152,13 +152,10 @@ def physics_from_args(args, **more):
 
 
 def simulation_of(rig, track, physics: str, settings):
-    """The FEM face of ``rig.face`` driven by ``track`` (every setting checked before any step)."""
-    from visemeface.motion import SimulatedMotion
-    from visemeface.physics.drive import StickySimulation
-    from visemeface.physics.face_model import build_fem_face
+    """The FEM face of ``rig.face`` driven by ``track`` (:func:`visemeface.animate.simulated_motion`)."""
+    from visemeface.animate import simulated_motion
 
-    return SimulatedMotion(StickySimulation(build_fem_face(rig.face), rig, track, physics=physics,
-                                            settings=settings))
+    return simulated_motion(rig, track, physics, settings)
 
 
 def checkpoint_of(motion, sinks, args):

@@ -31,8 +31,7 @@ the frames there whose settings match; with --physics the simulation saves its
 state after every frame in OUT.mp4.checkpoint/ and --resume continues from it.
 """
 
-#: Longest utterance one run animates (s): longer means wrong units far more often than a 3-hour take.
-MAX_UTTERANCE_S = 3 * 3600
+from visemeface.animate import MAX_UTTERANCE_S, parse_emotions  # noqa: F401  (their home: visemeface.animate)
 
 
 def add_animation_arguments(p: argparse.ArgumentParser, video_default: str) -> None:
@@ -71,59 +70,15 @@ def check_early(args, default_video: Path):
     return sinks, render, opt.physics_from_args(args)
 
 
-def parse_emotions(specs, known) -> dict[str, float]:
-    """``["happiness=0.6", "anger"]`` -> ``{"happiness": 0.6, "anger": 1.0}``, names checked."""
-    from visemeface.errors import InputError, close_matches
-    from visemeface.postures.library import parse_weights
-
-    emotions = parse_weights(specs)
-    known = list(known)
-    for name in emotions:
-        if name not in known:
-            raise InputError(f"unknown emotion {name!r}{close_matches(name, known)}")
-    return emotions
-
-
-def _warn_audio_length(audio, track, fps) -> None:
-    import warnings
-
-    from visemeface.pipeline import check_audio
-
-    audio_s, video_s = check_audio(audio), len(track) / fps
-    if abs(audio_s - video_s) > 1.0 / fps:
-        what = "padded with silence" if audio_s < video_s else "cut"
-        warnings.warn(f"{audio}: the audio lasts {audio_s:.2f} s, the animation {video_s:.2f} s; "
-                      f"the audio is {what} to the animation", stacklevel=3)
-
-
 def animate_utterance(utterance, args, sinks, render, physics) -> int:
-    """Utterance -> activation track -> motion (rig or FEM face) -> the sinks; prints a summary."""
+    """Utterance -> the sinks through :func:`visemeface.animate.animate`; prints a summary."""
     from visemeface import pipeline
-    from visemeface.errors import InputError
-    from visemeface.motion import KinematicMotion
-    from visemeface.postures.library import load_expressions, load_visemes
-    from visemeface.speech.timeline import activation_track
+    from visemeface.animate import animate
 
-    if utterance.end > MAX_UTTERANCE_S:
-        raise InputError(f"the transcript lasts {utterance.end:.0f} s, over the {MAX_UTTERANCE_S} s limit of one "
-                         "run (wrong time units? try --format / --sample-rate)")
-    rig = opt.build_rig(args)
-    emotions = parse_emotions(args.emotion, load_expressions(rig=rig).index)
-    ranges = {n: tuple(r) for n, r in zip(rig.names, rig.ranges)}
-    track = activation_track(utterance, load_visemes(rig=rig), fps=args.fps, mode=args.interp,
-                             emotions=emotions or None, ranges=ranges)
-    if args.audio is not None and any(s.name == "video" for s in sinks):
-        _warn_audio_length(args.audio, track, args.fps)
-    if physics is None:
-        motion = KinematicMotion(rig, track)
-    else:
-        motion = opt.simulation_of(rig, track, args.physics, physics)
-    checkpoint = opt.checkpoint_of(motion, sinks, args)
-    stats = pipeline.run(motion, sinks, render,
-                         info=dict(audio=args.audio, rig=rig, track=track, end_time=utterance.end,
-                                   extra={"motion_key": motion.key(), "utterance": utterance, "interp": args.interp,
-                                          "source": str(getattr(args, "transcript", None) or "text")}),
-                         checkpoint=checkpoint, resume=args.resume, show_progress=not args.quiet)
+    stats = animate(utterance, sinks, render, rig=opt.build_rig(args), emotions=args.emotion, interp=args.interp,
+                    fps=args.fps, audio=args.audio, physics=args.physics, physics_settings=physics,
+                    checkpoint=lambda motion: opt.checkpoint_of(motion, sinks, args), resume=args.resume,
+                    show_progress=not args.quiet, source=str(getattr(args, "transcript", None) or "text"))
     if not args.quiet:
         print(pipeline.summary(stats, args.fps))
     return 0

@@ -1,0 +1,113 @@
+"""An utterance to a finished run: the library path of ``speak``, ``say`` and ``batch``.
+
+::
+
+    Utterance --activation_track--> track --KinematicMotion / SimulatedMotion--> motion --pipeline.run--> sinks
+
+:func:`animate` is everything those commands do after they have an utterance
+and their outputs: build the activation track (visemes, coarticulation,
+emotions), the motion (the kinematic rig, or the FEM face with ``physics``)
+and stream it into the sinks through :func:`visemeface.pipeline.run`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+
+from visemeface.errors import InputError, close_matches
+
+#: Longest utterance one run animates (s): longer means wrong units far more often than a 3-hour take.
+MAX_UTTERANCE_S = 3 * 3600
+
+
+def parse_emotions(specs, known: Iterable[str]) -> dict[str, float]:
+    """``["happiness=0.6", "anger"]`` -> ``{"happiness": 0.6, "anger": 1.0}``, names checked."""
+    from visemeface.postures.library import parse_weights
+
+    emotions = parse_weights(specs)
+    known = list(known)
+    for name in emotions:
+        if name not in known:
+            raise InputError(f"unknown emotion {name!r}{close_matches(name, known)}")
+    return emotions
+
+
+def _warn_audio_length(audio, track, fps) -> None:
+    import warnings
+
+    from visemeface.pipeline import check_audio
+
+    audio_s, video_s = check_audio(audio), len(track) / fps
+    if abs(audio_s - video_s) > 1.0 / fps:
+        what = "padded with silence" if audio_s < video_s else "cut"
+        warnings.warn(f"{audio}: the audio lasts {audio_s:.2f} s, the animation {video_s:.2f} s; "
+                      f"the audio is {what} to the animation", stacklevel=4)
+
+
+def simulated_motion(rig, track, physics: str, settings=None):
+    """The FEM face of ``rig.face`` driven by ``track`` (every setting checked before any step)."""
+    from visemeface.motion import SimulatedMotion
+    from visemeface.physics.drive import PhysicsSettings, StickySimulation
+    from visemeface.physics.face_model import build_fem_face
+
+    return SimulatedMotion(StickySimulation(build_fem_face(rig.face), rig, track, physics=physics,
+                                            settings=settings or PhysicsSettings()))
+
+
+def animate(utterance, sinks: list, render=None, *, rig=None, emotions=None, interp: str | None = None,
+            fps: float = 30.0, audio=None, physics: str | None = None, physics_settings=None,
+            checkpoint: Callable | None = None, resume: bool = False, show_progress: bool = True, source: str = "text"):
+    """Animate ``utterance`` into ``sinks``; returns the run's :class:`~visemeface.pipeline.RunStats`.
+
+    Parameters
+    ----------
+    utterance : Utterance
+    sinks : list of Sink
+        The outputs (checked by their constructors before any work).
+    render : RenderSettings, optional
+    rig : MuscleRig, optional
+        Default: the embedded face's rig.
+    emotions : list of str or dict, optional
+        ``NAME[=W]`` specs (names checked against the rig's expression table) or a checked dict.
+    interp : str, optional
+        Interpolation between visemes (default: coarticulation).
+    fps : float
+    audio : Path, optional
+        Sound muxed into a video sink (a length mismatch is warned about).
+    physics : str, optional
+        ``"sticky"`` or ``"elastic"`` for the FEM face; None for the kinematic rig.
+    physics_settings : PhysicsSettings, optional
+    checkpoint : callable, optional
+        ``checkpoint(motion) -> RunCheckpoint | None`` for a resumable motion.
+    resume : bool
+        Continue from the checkpoint and reuse kept frames.
+    source : str
+        Where the utterance came from (a transcript's path, or "text"), recorded by exports that name it.
+    """
+    from visemeface import pipeline
+    from visemeface.motion import KinematicMotion
+    from visemeface.muscles.rig import default_rig
+    from visemeface.postures.library import load_expressions, load_visemes
+    from visemeface.speech.timeline import MODES, activation_track
+
+    if utterance.end > MAX_UTTERANCE_S:
+        raise InputError(f"the transcript lasts {utterance.end:.0f} s, over the {MAX_UTTERANCE_S} s limit of one "
+                         "run (wrong time units? try --format / --sample-rate)")
+    rig = rig if rig is not None else default_rig()
+    if not isinstance(emotions, dict):
+        emotions = parse_emotions(emotions, load_expressions(rig=rig).index)
+    ranges = {n: tuple(r) for n, r in zip(rig.names, rig.ranges)}
+    track = activation_track(utterance, load_visemes(rig=rig), fps=fps, mode=interp or MODES[0],
+                             emotions=emotions or None, ranges=ranges)
+    if audio is not None and any(s.name == "video" for s in sinks):
+        _warn_audio_length(audio, track, fps)
+    if physics is None or physics == "none":
+        motion = KinematicMotion(rig, track)
+    else:
+        motion = simulated_motion(rig, track, physics, physics_settings)
+    return pipeline.run(motion, sinks, render,
+                        info=dict(audio=audio, rig=rig, track=track, end_time=utterance.end,
+                                  extra={"motion_key": motion.key(), "utterance": utterance,
+                                         "interp": interp or MODES[0], "source": source}),
+                        checkpoint=checkpoint(motion) if checkpoint is not None else None,
+                        resume=resume, show_progress=show_progress)
