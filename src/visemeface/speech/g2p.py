@@ -56,7 +56,7 @@ from visemeface.postures.phonemes import DECTALK, SILENCE, is_vowel, to_dectalk
 from visemeface.resources import data_path
 
 __all__ = ["DEFAULT_RATE_WPM", "durations", "inherent_duration", "number_to_words", "punctuation_pause",
-           "speech_span", "text_to_segments", "text_to_utterance", "timing", "word_to_arpabet"]
+           "text_to_segments", "text_to_utterance", "timing", "word_to_arpabet"]
 
 
 def _read(name: str) -> list[dict[str, str]]:
@@ -252,47 +252,6 @@ def _plain_tokens(text: str, start: int, end: int):
             yield "pause", kind, line
 
 
-def speech_span(audio, threshold_db: float = -35.0, frame: float = 0.02,
-                hop: float = 0.01) -> tuple[float, float, float]:
-    """Start and end (s) of the speech in an audio file, and its duration.
-
-    The signal (mixed to mono) is cut into frames of ``frame`` seconds every
-    ``hop`` seconds; a frame is speech when its RMS energy is within
-    ``threshold_db`` of the loudest frame's,
-
-    .. math:: 20\\log_{10}(\\mathrm{rms}_k / \\max_j \\mathrm{rms}_j) > \\text{threshold\\_db},
-
-    and the span runs from the first speech frame's start to the last one's end
-    (leading and trailing silence trimmed).
-
-    Raises
-    ------
-    InputError
-        The file cannot be read as audio, or is silent.
-    """
-    import soundfile as sf
-    try:
-        data, rate = sf.read(str(audio), dtype="float64", always_2d=True)
-    except Exception as exc:  # soundfile raises LibsndfileError, RuntimeError, TypeError...
-        raise InputError(f"cannot read audio: {exc}", audio) from None
-    duration = data.shape[0] / rate
-    mono = data.mean(axis=1)
-    n = max(1, int(round(frame * rate)))
-    h = max(1, int(round(hop * rate)))
-    if mono.size < n:
-        mono = np.pad(mono, (0, n - mono.size))
-    starts = np.arange(0, mono.size - n + 1, h)
-    windows = np.lib.stride_tricks.sliding_window_view(mono, n)[starts]
-    rms = np.sqrt(np.mean(windows ** 2, axis=1))
-    peak = rms.max()
-    if not np.isfinite(peak) or peak <= 0:
-        raise InputError("audio is silent: no speech to align to", audio)
-    loud = np.flatnonzero(rms > peak * 10 ** (threshold_db / 20))
-    t0 = starts[loud[0]] / rate
-    t1 = min(duration, (starts[loud[-1]] + n) / rate)
-    return float(t0), float(t1), float(duration)
-
-
 #: Punctuation marks of DECtalk strings and the phrase breaks they make (``timing.csv``'s pauses).
 _PAUSE_KIND = {",": "comma", ";": "clause", ":": "clause", ".": "sentence", "!": "sentence", "?": "sentence"}
 
@@ -399,7 +358,11 @@ def _audio_map(audio, speech_t0: float, speech_t1: float, end_time: float):
     """The map from model time to audio time (identity without audio) and the utterance's end."""
     if audio is None:
         return (lambda x: np.asarray(x, dtype=float)), end_time
-    a0, a1, total = speech_span(audio)
+    from visemeface.speech.audio import read_audio, speech_span
+
+    samples, rate = read_audio(audio)
+    a0, a1 = speech_span(samples, rate, audio)
+    total = samples.size / rate
     stretch = (a1 - a0) / (speech_t1 - speech_t0)
     return (lambda x: a0 + (np.asarray(x, dtype=float) - speech_t0) * stretch), max(total, a1)
 
@@ -417,7 +380,7 @@ def text_to_utterance(text: str, rate_wpm: float | None = None, audio=None, *, p
         Ignored when ``audio`` is given.
     audio : path, optional
         A recording of the text: the phones are stretched linearly onto its
-        speech span (:func:`speech_span`), the silence before and after it
+        speech span (:func:`visemeface.speech.audio.speech_span`), the silence before and after it
         becoming ``_`` segments, so the segments end with the audio.
     path : path, optional
         Named in error messages (the file the text came from).
