@@ -190,23 +190,9 @@ def summary(stats: RunStats, fps: float) -> str:
 
 
 def check_audio(path) -> float:
-    """Duration in seconds of a sound file; :class:`InputError` if it cannot be read or holds no sound."""
-    import numpy as np
-    import soundfile as sf
-    from pathlib import Path
+    """Duration in seconds of a recording (sound file or video track); :class:`InputError` if it cannot be
+    read or holds no sound (:func:`visemeface.speech.audio.read_audio`)."""
+    from visemeface.speech.audio import read_audio
 
-    path = Path(path)
-    if not path.is_file():
-        raise InputError("audio file not found", path)
-    try:
-        info = sf.info(str(path))
-        if info.frames <= 0 or info.samplerate <= 0:
-            raise InputError("audio file holds no samples", path)
-        samples, _ = sf.read(str(path), frames=min(info.frames, 60 * info.samplerate), dtype="float32")
-    except InputError:
-        raise
-    except Exception as exc:  # soundfile raises its own LibsndfileError / RuntimeError
-        raise InputError(f"unreadable audio ({str(exc).splitlines()[0]})", path) from None
-    if not np.all(np.isfinite(samples)):
-        raise InputError("audio holds non-finite samples (NaN or infinity)", path)
-    return info.frames / info.samplerate
+    samples, rate = read_audio(path)
+    return samples.size / rate

@@ -27,6 +27,7 @@ BASE = {
     "simulate": ["part"],
     "analyze": ["frames", "--box", "2,4,12,6", "-o", "a.csv"],
     "compare": ["p1.csv", "p2.csv"],
+    "lipsync": ["a.wav", "--text", "ah ee", "-o", "a.lab"],
 }
 #: Options that take no invalid value, with the reason.
 FREE = {}
@@ -62,7 +63,9 @@ def _cases():
 
 
 @pytest.fixture(scope="module")
-def prepared(tmp_path_factory):
+def prepared(tmp_path_factory, vowels_wav):
+    import shutil
+
     import pandas as pd
 
     from visemeface.export.images import write_png
@@ -76,6 +79,7 @@ def prepared(tmp_path_factory):
                             "area": [0.0, 0.1, 0.2], "width": [0.0, 0.5, 0.6], "height": [0.0, 0.1, 0.2]})
     profile.to_csv(root / "p1.csv", index=False)
     profile.to_csv(root / "p2.csv", index=False)
+    shutil.copy(vowels_wav, root / "a.wav")
     return root
 
 

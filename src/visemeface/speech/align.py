@@ -151,6 +151,8 @@ def _force_align(pcm: bytes, words, where):
         raise InputError("the text could not be aligned to the audio (does it match the recording?)",
                          where) from None
     out = []
+    if sum(w.name not in _SILENCE for w in alignment) != len(keys):
+        raise InputError("the text could not be aligned to the audio (does it match the recording?)", where)
     for w in alignment:
         phones = [(p.name, p.start / FRAME_RATE, (p.start + p.duration) / FRAME_RATE) for p in w]
         out.append((w.name.split("(")[0], w.start / FRAME_RATE, (w.start + w.duration) / FRAME_RATE, w.score,
