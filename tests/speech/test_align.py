@@ -111,3 +111,21 @@ def test_speak_a_recording_end_to_end(vowels_wav, tmp_path, monkeypatch, capsys)
     assert [p for p in read_utterance("v.TextGrid").segments.phoneme if p != "_"] == ["aa", "iy"]
     assert main(["speak", str(vowels_wav), "--audio", str(vowels_wav), "-o", "w.mp4"]) == 2
     assert "--audio" in capsys.readouterr().err and not (tmp_path / "w.mp4").exists()
+
+
+def test_say_speaks_with_the_tts_extra_and_hints_without_it(tmp_path, monkeypatch, capsys):
+    from visemeface.export.video import read_video_info
+    from visemeface.speech import tts
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(tts, "available", lambda: False)
+    assert main(["say", "mama", "--size", "32", "--msaa", "0", "-o", "quiet.mp4"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("visemeface[tts]") == 1 and read_video_info("quiet.mp4")["audio_rate"] == 0
+    monkeypatch.undo()
+    pytest.importorskip("espeakng_loader", reason="the optional tts extra (GPL eSpeak NG) is not installed")
+    monkeypatch.chdir(tmp_path)
+    assert main(["say", "Bob moves five boats", "--size", "32", "--msaa", "0", "-o", "loud.mp4", "-q"]) == 0
+    info = read_video_info("loud.mp4")
+    assert info["audio_rate"] > 0 and info["audio_samples"] / info["audio_rate"] == pytest.approx(
+        info["n_frames"] / info["fps"], abs=0.05)

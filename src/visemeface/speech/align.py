@@ -210,7 +210,7 @@ def _check_match(aligned, where) -> float:
     return per_frame
 
 
-def utterance_from_audio(audio, text: str | None = None, *, where=None) -> Utterance:
+def utterance_from_audio(audio, text: str | None = None, *, where=None, check_text: bool = True) -> Utterance:
     """Timed phones (and words, emotion keys) of a recording.
 
     Parameters
@@ -221,6 +221,9 @@ def utterance_from_audio(audio, text: str | None = None, *, where=None) -> Utter
         What is said: forced alignment (accurate). None: phone recognition.
     where : str, optional
         Named in error messages (default: the audio path).
+    check_text : bool
+        Refuse text that does not match the audio (:data:`MISMATCH_SCORE`); off for audio known
+        to say the text (synthesised speech, which scores poorly on a model of human voices).
 
     Returns
     -------
@@ -243,7 +246,8 @@ def utterance_from_audio(audio, text: str | None = None, *, where=None) -> Utter
         return Utterance(seg, source_format="recognised")
     words, tags = _words_of(text, where)
     aligned = _force_align(pcm, words, where)
-    _check_match(aligned, where)
+    if check_text:
+        _check_match(aligned, where)
     timed, word_rows = [], []
     spoken = iter(words)
     for name, start, end, _score, phones in aligned:
