@@ -55,8 +55,8 @@ from visemeface.errors import InputError
 from visemeface.postures.phonemes import DECTALK, SILENCE, is_vowel, to_dectalk
 from visemeface.resources import data_path
 
-__all__ = ["DEFAULT_RATE_WPM", "cmu_pronunciations", "durations", "inherent_duration", "number_to_words", "punctuation_pause",
-           "text_to_segments", "text_to_utterance", "timing", "word_to_arpabet"]
+__all__ = ["DEFAULT_RATE_WPM", "arpabet_to_dectalk", "cmu_pronunciations", "durations", "inherent_duration",
+           "letter_to_sound", "number_to_words", "punctuation_pause", "text_to_segments", "text_to_utterance", "timing", "word_to_arpabet"]
 
 
 def _read(name: str) -> list[dict[str, str]]:
@@ -126,24 +126,25 @@ from visemeface.speech.numbers import number_to_words  # noqa: E402  (re-exporte
 
 # ----------------------------------------------------------------------------- words
 
-# Letter-to-sound fallback: ordered (grapheme, ARPAbet) rules, longest first. Deliberately
-# simple: it only has to give a plausible mouth shape for names and made-up words.
-_LTS = [
-    ("tch", "CH"), ("sch", "S K"), ("igh", "AY"), ("ough", "AO"),
-    ("ch", "CH"), ("sh", "SH"), ("th", "TH"), ("ph", "F"), ("ng", "NG"), ("ck", "K"),
-    ("qu", "K W"), ("wh", "W"), ("gh", "G"), ("kn", "N"), ("wr", "R"),
-    ("ee", "IY"), ("ea", "IY"), ("oo", "UW"), ("ou", "AW"), ("ow", "OW"), ("ai", "EY"),
-    ("ay", "EY"), ("oa", "OW"), ("oi", "OY"), ("oy", "OY"), ("au", "AO"), ("aw", "AO"),
-    ("ie", "IY"), ("ei", "EY"), ("ue", "UW"), ("ew", "UW"),
-    ("a", "AE"), ("b", "B"), ("c", "K"), ("d", "D"), ("e", "EH"), ("f", "F"), ("g", "G"),
-    ("h", "HH"), ("i", "IH"), ("j", "JH"), ("k", "K"), ("l", "L"), ("m", "M"), ("n", "N"),
-    ("o", "AA"), ("p", "P"), ("q", "K"), ("r", "R"), ("s", "S"), ("t", "T"), ("u", "AH"),
-    ("v", "V"), ("w", "W"), ("x", "K S"), ("y", "IY"), ("z", "Z"),
-]
+@lru_cache(maxsize=1)
+def _lts_rules() -> tuple[tuple[str, str], ...]:
+    """The ordered (grapheme, ARPAbet) rules of ``data/phonemes/letter_to_sound.csv``."""
+    return tuple((r["grapheme"], r["arpabet"]) for r in _read("letter_to_sound.csv"))
+
+
 _ARPA_VOWELS = {"AA", "AE", "AH", "AO", "AW", "AY", "EH", "ER", "EY", "IH", "IY", "OW", "OY", "UH", "UW"}
 
 
-def _letter_to_sound(word: str) -> list[str]:
+def letter_to_sound(word: str) -> list[str]:
+    """ARPAbet phones (stress on the first vowel) of a word spelled by the letter-to-sound rules.
+
+    A word without a vowel letter is an initialism, spelled letter by letter ("XYZ" -> ex why zee).
+
+    Examples
+    --------
+    >>> letter_to_sound("blick")
+    ['B', 'L', 'IH1', 'K']
+    """
     w = word.lower()
     if not re.search(r"[aeiouy]", w):
         # No vowel letter: an initialism, spelled letter by letter ("XYZ" -> ex why zee).
@@ -153,7 +154,7 @@ def _letter_to_sound(word: str) -> list[str]:
     phones: list[str] = []
     i = 0
     while i < len(w):
-        for graph, arpa in _LTS:
+        for graph, arpa in _lts_rules():
             if w.startswith(graph, i):
                 nxt = w[i + len(graph):i + len(graph) + 1]
                 if graph == "c" and nxt in ("e", "i", "y"):
@@ -190,15 +191,18 @@ def word_to_arpabet(word: str, warn: bool = True) -> list[str]:
     if warn:
         warnings.warn(f"word {word!r} is not in the CMU dictionary; spelled by letter-to-sound rules",
                       stacklevel=3)
-    return _letter_to_sound(key)
+    return letter_to_sound(key)
 
 
 _R_VOWELS = {"IH": "ir", "IY": "ir", "EH": "er", "EY": "er", "AE": "er", "AA": "ar", "AO": "or",
              "OW": "or", "UH": "ur", "UW": "ur"}
 
 
-def _word_to_dectalk(arpa: list[str]) -> list[tuple[str, int | None]]:
-    """DECtalk symbols with the stress of vowels (None for consonants) for one word."""
+def arpabet_to_dectalk(arpa: list[str]) -> list[tuple[str, int | None]]:
+    """DECtalk symbols with the stress of vowels (None for consonants) for one word's ARPAbet phones.
+
+    ``Y UW`` becomes ``yu`` and a vowel before a tautosyllabic ``R`` an r-coloured vowel.
+    """
     out: list[tuple[str, int | None]] = []
     i = 0
     while i < len(arpa):
@@ -303,7 +307,7 @@ def _phrase_items(text: str, path, warn: bool) -> list[tuple]:
         if kind == "word":
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
-                phones = _word_to_dectalk(word_to_arpabet(value, warn=warn))
+                phones = arpabet_to_dectalk(word_to_arpabet(value, warn=warn))
             for w in caught:
                 msg = f"{path}:{line}: {w.message}" if path is not None else str(w.message)
                 warnings.warn(msg, UserWarning, stacklevel=3)
