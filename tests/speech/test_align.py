@@ -129,3 +129,29 @@ def test_say_speaks_with_the_tts_extra_and_hints_without_it(tmp_path, monkeypatc
     info = read_video_info("loud.mp4")
     assert info["audio_rate"] > 0 and info["audio_samples"] / info["audio_rate"] == pytest.approx(
         info["n_frames"] / info["fps"], abs=0.05)
+
+
+def test_lipsync_takes_the_words_of_a_text_beside_the_recording(vowels_wav, tmp_path, monkeypatch, capsys):
+    import shutil
+
+    monkeypatch.chdir(tmp_path)
+    shutil.copy(vowels_wav, "take.wav")
+    (tmp_path / "take.txt").write_text("ah ee\n")
+    assert main(["lipsync", "take.wav", "-o", "take.json"]) == 0
+    out = capsys.readouterr()
+    assert "take.txt" in out.err and "2 words aligned" in out.out
+    assert main(["lipsync", "take.wav", "--text", "ah", "--text-file", "take.txt", "-o", "x.lab"]) == 2
+    assert main(["lipsync", "take.wav", "-o", "take.json"]) == 2                 # exists: --force
+    assert "--force" in capsys.readouterr().err
+
+
+@pytest.mark.realdata
+def test_speak_a_video_muxes_its_sound(realdata, tmp_path, monkeypatch):
+    from visemeface.export.video import read_video_info
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["speak", str(realdata / "bbaf2n.mpg"), "--text", "bin blue at f two now", "--size", "32",
+                 "--msaa", "0", "--fps", "25", "-o", "b.mp4", "-q"]) == 0
+    info = read_video_info("b.mp4")
+    assert info["n_frames"] == 75 and info["size"] == (32, 32)                 # our frames, not the clip's
+    assert info["audio_samples"] / info["audio_rate"] == pytest.approx(3.0, abs=0.03)
