@@ -191,8 +191,7 @@ def summary(stats: RunStats, fps: float) -> str:
 
 def check_audio(path) -> float:
     """Duration in seconds of a recording (sound file or video track); :class:`InputError` if it cannot be
-    read or holds no sound (:func:`visemeface.speech.audio.read_audio`)."""
-    from visemeface.speech.audio import read_audio
+    read or holds no sound (:func:`visemeface.speech.audio.audio_duration`)."""
+    from visemeface.speech.audio import audio_duration
 
-    samples, rate = read_audio(path)
-    return samples.size / rate
+    return audio_duration(path)

@@ -31,7 +31,7 @@ import numpy as np
 
 from visemeface.errors import InputError
 
-__all__ = ["AUDIO_SUFFIXES", "MIN_DYNAMIC_DB", "is_recording", "media_wav", "read_audio", "resample",
+__all__ = ["AUDIO_SUFFIXES", "MIN_DYNAMIC_DB", "audio_duration", "is_recording", "media_wav", "read_audio", "resample",
            "speech_span"]
 
 #: Suffixes read as sound files (soundfile first, then ffmpeg).
@@ -110,6 +110,30 @@ def read_audio(path) -> tuple[np.ndarray, int]:
     if samples.size / rate > MAX_SECONDS:
         raise InputError(f"audio lasts {samples.size / rate:.0f} s, over the {MAX_SECONDS} s limit", path)
     return samples, int(rate)
+
+
+def audio_duration(path) -> float:
+    """Seconds of sound in a recording, checked readable and finite without decoding hours of it.
+
+    A sound file's header gives its length and its first minute is read (and checked for NaN);
+    anything else (a video's track) is decoded by :func:`read_audio`.
+    """
+    import soundfile as sf
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("audio file not found", path)
+    try:
+        info = sf.info(str(path))
+        head, _ = sf.read(str(path), frames=min(info.frames, 60 * info.samplerate), dtype="float32")
+    except Exception:  # not a libsndfile format: decode it all (videos: minutes, not hours)
+        samples, rate = read_audio(path)
+        return samples.size / rate
+    if info.frames <= 0 or info.samplerate <= 0:
+        raise InputError("audio file holds no samples", path)
+    if not np.all(np.isfinite(head)):
+        raise InputError("audio holds non-finite samples (NaN or infinity)", path)
+    return info.frames / info.samplerate
 
 
 def resample(samples: np.ndarray, rate: int, target: int) -> np.ndarray:
