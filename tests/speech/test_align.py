@@ -39,8 +39,9 @@ def test_alignment_of_a_real_clip_matches_the_grid_word_boundaries(realdata):
 
 
 def test_synthetic_vowels_align_and_survive_8_khz_and_stereo_48_khz(vowels_wav, tmp_path):
-    u = utterance_from_audio(vowels_wav, "ah ee")
+    u = utterance_from_audio(vowels_wav, "ah [happiness 0.5] ee")
     assert list(u.words.word) == ["ah", "ee"]
+    assert u.emotion_keys.time.tolist() == [u.words.start[1]] and u.emotion_keys.weight.tolist() == [0.5]
     assert np.allclose(u.words.start, [0.25, 0.75], atol=0.04) and np.allclose(u.words.end, [0.65, 1.15], atol=0.04)
     assert [p for p in u.segments.phoneme if p != "_"] == ["aa", "iy"]
     x, rate = read_audio(vowels_wav)
@@ -111,6 +112,10 @@ def test_speak_a_recording_end_to_end(vowels_wav, tmp_path, monkeypatch, capsys)
     assert [p for p in read_utterance("v.TextGrid").segments.phoneme if p != "_"] == ["aa", "iy"]
     assert main(["speak", str(vowels_wav), "--audio", str(vowels_wav), "-o", "w.mp4"]) == 2
     assert "--audio" in capsys.readouterr().err and not (tmp_path / "w.mp4").exists()
+    copy = tmp_path / "take.mp4"
+    copy.write_bytes(b"a video")
+    assert main(["speak", "take.mp4", "--force"]) == 2                           # never the input itself
+    assert "overwrite an input" in capsys.readouterr().err and copy.read_bytes() == b"a video"
 
 
 def test_say_speaks_with_the_tts_extra_and_hints_without_it(tmp_path, monkeypatch, capsys):

@@ -211,6 +211,10 @@ def run(args) -> int:
         raise InputError("transcript not found", args.transcript)
     sinks, render, physics = check_early(args, Path.cwd() / (args.transcript.stem + ".mp4"))
     saved = _transcript_target(args)
+    inputs = {args.transcript.resolve()} | ({args.audio.resolve()} if args.audio is not None else set())
+    for target in [t for s in sinks for t in s.targets()] + ([saved.path] if saved is not None else []):
+        if Path(target).resolve() in inputs:
+            raise InputError("the output would overwrite an input; name another with -o", target)
     utterance, recording = _read_input(args)
     with tempfile.TemporaryDirectory(prefix="visemeface-") as folder:
         sound = None if recording is None else media_wav(recording, folder)
