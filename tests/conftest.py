@@ -90,3 +90,30 @@ def pytest_terminal_summary(terminalreporter):
         total = {k: total[k] + c[k] for k in total}
     terminalreporter.write_line(f"{'all readers':30s} {sum(total.values()):5d} cases: {total['read']:4d} read, "
                                 f"{total['refused']:4d} refused, {total['crashed']} untyped crashes")
+@pytest.fixture(scope="session")
+def vowels_wav(tmp_path_factory) -> Path:
+    """1.4 s of formant-synthesised speech, "ah" (0.25-0.65 s) and "ee" (0.75-1.15 s), 16 kHz mono WAV.
+
+    A glottal pulse train at 120 Hz through three resonators per vowel (Peterson & Barney's formants),
+    between near-silences: enough for pocketsphinx to align the words "ah ee".
+    """
+    import numpy as np
+    import soundfile as sf
+    from scipy.signal import lfilter
+
+    rate = 16000
+
+    def vowel(formants, seconds=0.4, f0=120):
+        x = np.zeros(int(seconds * rate))
+        x[::rate // f0] = 1.0
+        for f, bw in formants:
+            r = np.exp(-np.pi * bw / rate)
+            x = lfilter([1 - r], [1, -2 * r * np.cos(2 * np.pi * f / rate), r * r], x)
+        return x / np.abs(x).max() * np.hanning(x.size) ** 0.3 * 0.5
+
+    x = np.r_[np.zeros(4000), vowel([(730, 90), (1090, 110), (2440, 170)]), np.zeros(1600),
+              vowel([(270, 60), (2290, 100), (3010, 150)]), np.zeros(4000)]
+    x += np.random.default_rng(0).normal(0, 1e-3, x.size)
+    path = tmp_path_factory.mktemp("voice") / "vowels.wav"
+    sf.write(str(path), x, rate)
+    return path

@@ -190,23 +190,8 @@ def summary(stats: RunStats, fps: float) -> str:
 
 
 def check_audio(path) -> float:
-    """Duration in seconds of a sound file; :class:`InputError` if it cannot be read or holds no sound."""
-    import numpy as np
-    import soundfile as sf
-    from pathlib import Path
+    """Duration in seconds of a recording (sound file or video track); :class:`InputError` if it cannot be
+    read or holds no sound (:func:`visemeface.speech.audio.audio_duration`)."""
+    from visemeface.speech.audio import audio_duration
 
-    path = Path(path)
-    if not path.is_file():
-        raise InputError("audio file not found", path)
-    try:
-        info = sf.info(str(path))
-        if info.frames <= 0 or info.samplerate <= 0:
-            raise InputError("audio file holds no samples", path)
-        samples, _ = sf.read(str(path), frames=min(info.frames, 60 * info.samplerate), dtype="float32")
-    except InputError:
-        raise
-    except Exception:  # soundfile raises its own LibsndfileError / RuntimeError, with libsndfile's wording
-        raise InputError("not a sound file that can be read (WAV, FLAC, OGG or MP3)", path) from None
-    if not np.all(np.isfinite(samples)):
-        raise InputError("audio holds non-finite samples (NaN or infinity)", path)
-    return info.frames / info.samplerate
+    return audio_duration(path)

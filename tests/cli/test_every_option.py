@@ -29,6 +29,7 @@ BASE = {
     "compare": ["p1.csv", "p2.csv"],
     "preview": ["a.glb"],
     "batch": ["jobs.csv", "-o", "out"],
+    "lipsync": ["a.wav", "--text", "ah ee", "-o", "a.lab"],
 }
 #: Options that take no invalid value, with the reason.
 FREE = {}
@@ -64,7 +65,9 @@ def _cases():
 
 
 @pytest.fixture(scope="module")
-def prepared(tmp_path_factory):
+def prepared(tmp_path_factory, vowels_wav):
+    import shutil
+
     import pandas as pd
 
     from visemeface.export.images import write_png
@@ -83,6 +86,7 @@ def prepared(tmp_path_factory):
 
     tri = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
     write_morph_animation_glb(root / "a.glb", tri, [[0, 1, 2]], tri[None] * 0.1, ["m"], [0.0, 1.0], [[0.0], [1.0]])
+    shutil.copy(vowels_wav, root / "a.wav")
     return root
 
 

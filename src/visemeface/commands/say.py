@@ -15,6 +15,11 @@ examples:
   visemeface say "Hello there." --emotion happiness=0.6 -o hello.mp4
   visemeface say "[anger 0.8] Bob moves five boats. [happiness] One five zero zero six!" -o tags.mp4
   visemeface say "Hello there." --audio hello.wav -o hello.mp4   # timing stretched to the audio
+  visemeface say "Hello there." --silent -o quiet.mp4           # no synthesised voice
+
+With the optional extra installed (pip install "visemeface[tts]": eSpeak NG, GPL-3.0) the text is
+spoken, the phones are aligned to that sound and it is muxed into the video; without it the
+video is silent and the phones are timed by the duration model (--rate).
 """
 
 
@@ -29,12 +34,18 @@ def register(subparsers) -> None:
     p.add_argument("text", metavar="TEXT", help="what to say (quote it)")
     p.add_argument("--rate", type=float, metavar="WPM", default=None,
                    help="speaking rate in words per minute (not with --audio, which times the text)")
+    p.add_argument("--silent", action="store_true",
+                   help="no synthesised voice even with the tts extra: the duration model times the text")
     add_animation_arguments(p, "say.mp4")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
+    import sys
+    import tempfile
+
     from visemeface.errors import InputError
+    from visemeface.speech import tts
     from visemeface.speech.g2p import text_to_utterance
 
     if not args.text.strip():
@@ -42,5 +53,18 @@ def run(args) -> int:
     if args.rate is not None and args.audio is not None:
         raise InputError("--rate and --audio both time the text; give one")
     sinks, render, physics = check_early(args, Path.cwd() / "say.mp4")
-    utterance = text_to_utterance(args.text, rate_wpm=args.rate, audio=args.audio)
-    return animate_utterance(utterance, args, sinks, render, physics)
+    speak_aloud = args.audio is None and not args.silent
+    if speak_aloud and not tts.available():
+        speak_aloud = False
+        if not args.quiet:
+            print(f"visemeface: note: {tts.HINT}", file=sys.stderr)
+    if not speak_aloud:
+        utterance = text_to_utterance(args.text, rate_wpm=args.rate, audio=args.audio)
+        return animate_utterance(utterance, args, sinks, render, physics)
+    from visemeface.speech.align import utterance_from_audio
+
+    text_to_utterance(args.text, rate_wpm=args.rate)        # the text's own errors first (tags, rate)
+    with tempfile.TemporaryDirectory(prefix="visemeface-") as folder:
+        wav = tts.synthesise(args.text, Path(folder) / "say.wav", rate_wpm=args.rate)
+        utterance = utterance_from_audio(wav, args.text, where="synthesised speech", check_text=False)
+        return animate_utterance(utterance, args, sinks, render, physics, audio=wav)

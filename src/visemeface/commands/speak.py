@@ -23,6 +23,8 @@ examples:
   visemeface speak a.txt --frames a_frames --resume   # keeps the finished frames
   visemeface speak a.txt --face my_head.obj -o mine.mp4   # any mesh with a .landmarks.json
   visemeface speak a.txt --physics sticky -o sticky.mp4   # after Ctrl-C: --resume continues the simulation
+  visemeface speak take.wav --text "set white with p two soon"   # a recording: aligned, its sound muxed
+  visemeface speak take.wav --save-transcript take.TextGrid      # no text: phones recognised; keep them
 
 Frames are streamed (pose or simulate, render, write one at a time): memory does
 not grow with the length of the utterance, and all outputs appear together when
@@ -70,15 +72,19 @@ def check_early(args, default_video: Path):
     return sinks, render, opt.physics_from_args(args)
 
 
-def animate_utterance(utterance, args, sinks, render, physics) -> int:
-    """Utterance -> the sinks through :func:`visemeface.animate.animate`; prints a summary."""
+def animate_utterance(utterance, args, sinks, render, physics, audio=None) -> int:
+    """Utterance -> the sinks through :func:`visemeface.animate.animate`; prints a summary.
+
+    ``audio`` (default ``--audio``) is the sound muxed into the video.
+    """
     from visemeface import pipeline
     from visemeface.animate import animate
 
     stats = animate(utterance, sinks, render, rig=opt.build_rig(args), emotions=args.emotion, interp=args.interp,
-                    fps=args.fps, audio=args.audio, physics=args.physics, physics_settings=physics,
-                    checkpoint=lambda motion: opt.checkpoint_of(motion, sinks, args), resume=args.resume,
-                    show_progress=not args.quiet, source=str(getattr(args, "transcript", None) or "text"))
+                    fps=args.fps, audio=args.audio if audio is None else audio, physics=args.physics,
+                    physics_settings=physics, checkpoint=lambda motion: opt.checkpoint_of(motion, sinks, args),
+                    resume=args.resume, show_progress=not args.quiet,
+                    source=str(getattr(args, "transcript", None) or "text"))
     if not args.quiet:
         print(pipeline.summary(stats, args.fps))
     return 0
@@ -91,10 +97,12 @@ def register(subparsers) -> None:
         "speak",
         help="animate a timed transcript: MP4 video (+ audio) and PNG/OBJ/PC2/glTF exports",
         description="Animate the face along a timed phoneme transcript (timed text, HTK .lab, TIMIT .PHN, "
-        "Praat/MFA TextGrid, MFA JSON/CSV, DECtalk string, or plain English text) and write an MP4 "
+        "Praat/MFA TextGrid, MFA JSON/CSV, DECtalk string, or plain English text) or a recording "
+        "(its phones aligned to --text, else recognised; its sound muxed) and write an MP4 "
         "(TRANSCRIPT's stem + .mp4 in the current folder unless -o) and any exports.",
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("transcript", type=Path, metavar="TRANSCRIPT", help="timed phoneme transcript")
+    p.add_argument("transcript", type=Path, metavar="TRANSCRIPT",
+                   help="timed phoneme transcript, or a recording (WAV/FLAC/OGG/MP3, a video's sound)")
     src = p.add_argument_group("transcript")
     src.add_argument("--format", choices=("auto",) + FORMATS, default="auto",
                      help="transcript format (default: detected from the content)")
@@ -106,18 +114,78 @@ def register(subparsers) -> None:
     src.add_argument("--rate", type=float, metavar="WPM",
                      help="plain-text transcripts only: speaking rate in words per minute "
                      "(with --audio the text is timed to the recording instead)")
+    from visemeface.commands.lipsync import add_text_arguments
+
+    add_text_arguments(src)
+    src.add_argument("--save-transcript", type=Path, metavar="OUT",
+                     help="also write the timed phones read or found: .txt, .lab, .TextGrid or .json")
     add_animation_arguments(p, "TRANSCRIPT's stem + .mp4")
     p.set_defaults(func=run)
 
 
-def run(args) -> int:
+def _transcript_target(args):
+    """The staged --save-transcript output (checked before any work), or None."""
+    if args.save_transcript is None:
+        return None
+    from visemeface.outputs import Staged
+    from visemeface.speech.writers import format_of
+
+    format_of(args.save_transcript)
+    return Staged(args.save_transcript, args.force)
+
+
+def _read_input(args):
+    """(Utterance, sound to mux or None) of the transcript or recording."""
     from visemeface.errors import InputError
+    from visemeface.speech.audio import is_recording
     from visemeface.speech.transcripts import read_utterance
+
+    if is_recording(args.transcript):
+        from visemeface.commands.lipsync import recording_utterance
+
+        if args.audio is not None:
+            raise InputError("--audio: a recording is its own sound; leave --audio out")
+        bad = [o for o, v in (("--format", args.format != "auto"), ("--tier", args.tier), ("--rate", args.rate),
+                              ("--alphabet", args.alphabet)) if v]
+        if bad:
+            raise InputError(f"{bad[0]} applies to transcripts, not to a recording")
+        return recording_utterance(args.transcript, args.text, args.text_file, args.quiet), args.transcript
+    if args.text is not None or args.text_file is not None:
+        raise InputError("--text/--text-file give the words of a recording; the input is a transcript")
+    fmt = None if args.format == "auto" else args.format
+    return read_utterance(args.transcript, fmt=fmt, tier=args.tier, sample_rate=args.sample_rate,
+                          alphabet=args.alphabet, rate_wpm=args.rate, audio=args.audio), None
+
+
+def run(args) -> int:
+    import tempfile
+
+    from visemeface.errors import InputError
+    from visemeface.speech.audio import media_wav
 
     if not args.transcript.is_file():
         raise InputError("transcript not found", args.transcript)
     sinks, render, physics = check_early(args, Path.cwd() / (args.transcript.stem + ".mp4"))
-    fmt = None if args.format == "auto" else args.format
-    utterance = read_utterance(args.transcript, fmt=fmt, tier=args.tier, sample_rate=args.sample_rate,
-                               alphabet=args.alphabet, rate_wpm=args.rate, audio=args.audio)
-    return animate_utterance(utterance, args, sinks, render, physics)
+    saved = _transcript_target(args)
+    inputs = {args.transcript.resolve()} | ({args.audio.resolve()} if args.audio is not None else set())
+    for target in [t for s in sinks for t in s.targets()] + ([saved.path] if saved is not None else []):
+        if Path(target).resolve() in inputs:
+            raise InputError("the output would overwrite an input; name another with -o", target)
+    utterance, recording = _read_input(args)
+    with tempfile.TemporaryDirectory(prefix="visemeface-") as folder:
+        sound = None if recording is None else media_wav(recording, folder)
+        try:
+            if saved is not None:
+                from visemeface.speech.writers import format_of, write_transcript
+
+                write_transcript(utterance, saved.open(), fmt=format_of(saved.path), force=True)
+            code = animate_utterance(utterance, args, sinks, render, physics, audio=sound)
+        except BaseException:
+            if saved is not None:
+                saved.abort()
+            raise
+    if saved is not None:
+        saved.commit()
+        if not args.quiet:
+            print(f"timed phones -> {saved.path}")
+    return code

