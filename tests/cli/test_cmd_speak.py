@@ -52,7 +52,7 @@ def test_check_audio(tmp_path):
     sf.write(tmp_path / "a.wav", np.zeros(8000, np.float32), 16000)
     assert pipeline.check_audio(tmp_path / "a.wav") == pytest.approx(0.5)
     (tmp_path / "bad.wav").write_bytes(b"RIFF....not a wave at all")
-    with pytest.raises(InputError, match="bad.wav: not a sound file that can be read"):
+    with pytest.raises(InputError, match="bad.wav: unreadable audio \\(not a sound file"):
         pipeline.check_audio(tmp_path / "bad.wav")
     with pytest.raises(InputError, match="not found"):
         pipeline.check_audio(tmp_path / "none.wav")
@@ -268,7 +268,7 @@ def test_speak_resume_from_finished_frames_renders_nothing(short, capsys, monkey
 @pytest.mark.parametrize("content, audio, message", [
     ("0.0 0.2 _\n0.2 0.4 qq\n", None, "short.txt:2"),                 # unknown phone
     ("0.0 0.3 _\n0.2 0.4 m\n0.4 0.5 _\n", None, "short.txt:"),           # overlapping times
-    (SHORT, "bad.wav", "bad.wav: not a sound file that can be read"),                     # unreadable audio
+    (SHORT, "bad.wav", "bad.wav: unreadable audio (not a sound file"),                     # unreadable audio
 ])
 def test_speak_bad_input_leaves_nothing(short, capsys, content, audio, message):
     (short / "short.txt").write_text(content)

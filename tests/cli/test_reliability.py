@@ -88,5 +88,5 @@ def test_a_fake_mp3_is_refused_in_plain_words(here, capsys):
     (here / "fake.mp3").write_bytes(b"xx")
     assert main(["speak", str(transcripts_path("bob_moves_five_boats.txt")), "--audio", "fake.mp3", "-o", "f.mp4"]) == 2
     err = capsys.readouterr().err.strip()
-    assert err == "visemeface: error: fake.mp3: not a sound file that can be read (WAV, FLAC, OGG or MP3)"
+    assert err == "visemeface: error: fake.mp3: unreadable audio (not a sound file, and no audio stream in it)"
     assert not (here / "f.mp4").exists()
