@@ -80,8 +80,9 @@ def analyze_frames(frames: Iterable[np.ndarray], box, fps: float, detector: Open
     ----------
     frames : iterable of ndarray (H, W, 3) uint8
         RGB frames.
-    box : MouthBox or (x, y, w, h)
-        Mouth box; checked against the first frame.
+    box : MouthBox or (x, y, w, h), or a sequence of them
+        Mouth box, or one box per frame (an automatic box that follows the head,
+        :func:`~visemeface.analysis.mouthbox.track_mouth`).
     fps : float
     detector : OpeningDetector, optional
         Settings (default: Otsu, no hull, no teeth handling).
@@ -89,16 +90,42 @@ def analyze_frames(frames: Iterable[np.ndarray], box, fps: float, detector: Open
         Called after each frame (e.g. to write an overlay).
     """
     detector = detector or OpeningDetector()
-    box = MouthBox.of(box)
+    boxes = per_frame_boxes(box)
     found = []
     for i, frame in enumerate(frames):
-        op = detector.detect(frame, box)
+        if i >= len(boxes):
+            raise InputError(f"{len(boxes)} mouth boxes for more frames{' in ' + source if source else ''}")
+        op = detector.detect(frame, boxes[i])
         found.append(op)
         if on_frame is not None:
             on_frame(i, frame, op)
     if not found:
         raise InputError(f"no frames to analyse{' in ' + source if source else ''}")
     return profile_from_openings(found, fps, source)
+
+
+class _Repeat:
+    """The same box for every frame."""
+
+    def __init__(self, box: MouthBox):
+        self.box = box
+
+    def __len__(self) -> int:
+        return 2 ** 62
+
+    def __getitem__(self, i: int) -> MouthBox:
+        return self.box
+
+
+def per_frame_boxes(box):
+    """An indexable of boxes, one per frame, from one box or a sequence of boxes."""
+    if isinstance(box, MouthBox):
+        return _Repeat(box)
+    seq = list(box)
+    if seq and all(isinstance(b, MouthBox) or (np.ndim(b) == 1 and len(b) == 4) for b in seq) \
+            and not all(np.isscalar(b) for b in seq):
+        return [MouthBox.of(b) for b in seq]
+    return _Repeat(MouthBox.of(seq))
 
 
 def write_profile(df: pd.DataFrame, path: str | Path, force: bool = False) -> None:

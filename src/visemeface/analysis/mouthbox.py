@@ -1,0 +1,158 @@
+"""Automatic mouth box for real video without a sidecar: find the face by skin colour, the lips in it.
+
+No face-landmark model ships inside a pip wheel that runs offline with this
+project's dependencies (see ``docs/analysis.md``), so the box comes from
+colour, the same cue the lip segmentation uses:
+
+1. *Face*: skin pixels in YCrCb, :math:`135 \\le C_r \\le 185`,
+   :math:`70 \\le C_b \\le 135`, :math:`Y \\ge 40` (the classic skin cluster of
+   Chai & Ngan, widened for a warm camera); the largest 8-connected skin region
+   of the frame (downscaled to at most 400 px wide), holes (eyes, mouth) filled. It must cover at
+   least ``min_face`` of the frame, or there is no face.
+2. *Lips*: inside the lower half of the face's bounding box (rows 0.5-0.95 of
+   its height, columns 0.2-0.8 of its width) the Lab :math:`a^*` channel is
+   split by Otsu's method, and its redder class split again (lips vs flushed
+   skin); of the large red regions near the face's vertical axis the lowest is
+   the mouth (the nose and the cheeks are above it), joined with a lip region
+   straight above or below it (lips parted by an opening). Its left and right
+   extremes are the corners.
+3. *Tracking*: every frame is searched again (no drift), and the box centre
+   is median-filtered over ``smooth`` frames; the box width -- the *natural
+   mouth width* that normalises every metric -- is the median of the per-frame
+   widths over the whole clip, so a wide-open or rounded frame does not
+   change the scale. The red region stops short of the corners, where the
+   lips thin to a dark line, so ``w`` is :data:`WIDEN` times its width. The box
+   reaches from ``0.15 w`` above the red region (the paler upper vermilion) to
+   its bottom; :class:`~visemeface.analysis.openings.OpeningDetector` pads it.
+
+A frame where no lips are found takes the neighbouring frames' box; a clip
+where no frame shows a face is an :class:`~visemeface.errors.InputError`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+import cv2
+import numpy as np
+
+from visemeface.analysis.openings import MouthBox
+from visemeface.errors import InputError
+
+
+#: Box width / red-region width. Tuned on the three GRID clips of ../shared/realdata: the hand-read
+#: corners lie 1-3 px beyond the red region of a 35-40 px mouth on each side.
+WIDEN = 1.15
+
+
+def face_mask(rgb: np.ndarray, min_face: float = 0.02) -> tuple[np.ndarray, tuple] | None:
+    """Skin mask of the largest skin region (holes filled) and its box ``(x, y, w, h)``, or None."""
+    ycc = cv2.cvtColor(rgb, cv2.COLOR_RGB2YCrCb)
+    skin = cv2.inRange(ycc, (40, 135, 70), (255, 185, 135))
+    skin = cv2.morphologyEx(skin, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(skin, connectivity=8)
+    if n < 2:
+        return None
+    i = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    if stats[i, cv2.CC_STAT_AREA] < min_face * skin.size:
+        return None
+    x, y, w, h = (int(v) for v in stats[i, :4])
+    region = (labels[y:y + h, x:x + w] == i).astype(np.uint8)
+    contours, _ = cv2.findContours(region, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    filled = np.zeros_like(region)
+    cv2.drawContours(filled, contours, -1, 1, cv2.FILLED)
+    return filled.view(bool), (x, y, w, h)
+
+
+def find_lips(rgb: np.ndarray, min_face: float = 0.02) -> tuple[float, float, float, float] | None:
+    """Lip extent ``(x_left, x_right, y_top, y_bottom)`` in frame pixels, or None (no face or no lips).
+
+    Works on a frame downscaled to at most 400 px wide; see the module notes.
+    """
+    h0, w0 = rgb.shape[:2]
+    f = max(1, int(np.ceil(w0 / 400)))
+    small = rgb[::f, ::f] if f > 1 else rgb
+    found = face_mask(np.ascontiguousarray(small), min_face)
+    if found is None:
+        return None
+    face, (fx, fy, fw, fh) = found
+    y0, y1 = int(0.5 * fh), int(0.95 * fh)
+    x0, x1 = int(0.2 * fw), int(0.8 * fw)
+    if y1 - y0 < 4 or x1 - x0 < 4:
+        return None
+    sub = np.ascontiguousarray(small[fy + y0:fy + y1, fx + x0:fx + x1])
+    inside = face[y0:y1, x0:x1]
+    a = cv2.GaussianBlur(cv2.cvtColor(sub, cv2.COLOR_RGB2LAB)[..., 1], (3, 3), 0)
+    vals = a[inside]
+    if vals.size < 16:
+        return None
+    t, _ = cv2.threshold(vals.reshape(1, -1), 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    upper = vals[vals > t]          # the redder half of the face, split again: lips vs flushed skin
+    if upper.size >= 16:
+        t, _ = cv2.threshold(upper.reshape(1, -1), 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    red = ((a > t) & inside).view(np.uint8)
+    red = cv2.morphologyEx(red, cv2.MORPH_OPEN, np.ones((2, 2), np.uint8))
+    n, labels, stats, cents = cv2.connectedComponentsWithStats(red, connectivity=8)
+    if n < 2:
+        return None
+    axis = fw / 2 - x0
+    area = stats[1:, cv2.CC_STAT_AREA].astype(float)
+    near = np.abs(cents[1:, 0] - axis) <= 0.15 * fw
+    big = near & (area >= 0.2 * area[near].max()) if near.any() else area >= 0.2 * area.max()
+    # The mouth is the lowest of the large red regions near the face's axis (the nose is above it).
+    i = 1 + int(np.argmax(np.where(big, cents[1:, 1], -np.inf)))
+    x, y, w, h = (int(v) for v in stats[i, :4])
+    # Lips parted by the opening are two regions: join those straight above or below this one.
+    for j in range(1, n):
+        xj, yj, wj, hj = (int(v) for v in stats[j, :4])
+        if j != i and area[j - 1] >= 0.2 * area[i - 1] and abs(cents[j, 0] - cents[i, 0]) <= 0.25 * w \
+                and 0.5 * w <= wj <= 1.5 * w and min(abs(yj + hj - y), abs(y + h - yj)) <= 0.25 * w:
+            x1_, y1_ = max(x + w, xj + wj), max(y + h, yj + hj)
+            x, y = min(x, xj), min(y, yj)
+            w, h = x1_ - x, y1_ - y
+    if w < 3:
+        return None
+    ox, oy = fx + x0, fy + y0
+    return ((ox + x) * f, (ox + x + w) * f, (oy + y) * f, (oy + y + h) * f)
+
+
+def _median_filter(v: np.ndarray, k: int) -> np.ndarray:
+    if k <= 1 or v.size < 3:
+        return v
+    r = k // 2
+    padded = np.pad(v, r, mode="edge")
+    return np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * r + 1), axis=1)
+
+
+def track_mouth(frames: Iterable[np.ndarray], smooth: int = 5, min_face: float = 0.02,
+                source: str = "") -> list[MouthBox]:
+    """One mouth box per frame (see the module notes); raises InputError if no frame shows a face."""
+    found, size = [], None
+    for frame in frames:
+        size = frame.shape[1], frame.shape[0]
+        found.append(find_lips(frame, min_face))
+    where = f" in {source}" if source else ""
+    if not found:
+        raise InputError(f"no frames{where}")
+    ok = np.array([f is not None for f in found])
+    if not ok.any():
+        raise InputError(f"no face found{where}: give the mouth box with --box X,Y,W,H or --box-json FILE")
+    ext = np.array([f if f is not None else (np.nan,) * 4 for f in found], float)
+    idx = np.arange(len(found))
+    for j in range(4):           # frames without lips: interpolate from their neighbours
+        ext[:, j] = np.interp(idx, idx[ok], ext[ok, j])
+    # The red region stops short of the corners, where the lips thin to a dark
+    # line: the box is WIDEN times the region's width (see WIDEN).
+    width = WIDEN * float(np.median(ext[:, 1] - ext[:, 0]))
+    cx = _median_filter((ext[:, 0] + ext[:, 1]) / 2, smooth)
+    top = _median_filter(ext[:, 2], smooth)
+    bottom = _median_filter(ext[:, 3], smooth)
+    w = max(4, int(round(width)))
+    boxes = []
+    for x, y0, y1 in zip(cx, top, bottom):
+        # From a little above the red region (the pale upper vermilion) to its bottom.
+        h = max(4, int(round(y1 - y0 + 0.15 * w)))
+        bx = int(np.clip(round(x - w / 2), 0, size[0] - w))
+        by = int(np.clip(round(y0 - 0.15 * w), 0, size[1] - h))
+        boxes.append(MouthBox(bx, by, w, h))
+    return boxes
