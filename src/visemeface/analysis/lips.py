@@ -172,7 +172,16 @@ def not_seam(opening: np.ndarray, lips: np.ndarray, crop: np.ndarray) -> np.ndar
         sel = labels == i
         likeness = min(float(np.percentile(light[sel], 10)) / l_lips, float(chroma[sel].mean()) / c_lips)
         keep[i] = likeness <= LIP_LIKENESS
-    return keep[labels].view(np.uint8)
+    kept = keep[labels]
+    # Trim the shaded inner lip off the kept regions: in each column, the span from the first
+    # to the last pixel unlike lip (dark or grey) inside the region.
+    unlike = kept & ((light <= LIP_LIKENESS * l_lips) | (chroma <= LIP_LIKENESS * c_lips))
+    rows = np.arange(opening.shape[0])[:, None]
+    big = opening.shape[0]
+    first = np.where(unlike, rows, big).min(axis=0)
+    last = np.where(unlike, rows, -1).max(axis=0)
+    span = (rows >= first) & (rows <= last) & kept
+    return span.view(np.uint8)
 
 
 def plausible_openings(opening: np.ndarray, box, min_px: float) -> np.ndarray:
