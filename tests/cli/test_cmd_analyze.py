@@ -92,10 +92,11 @@ def test_compare_prints_l2_and_plots(tmp_path, capsys, frame_dir, video):
     code, out, err = _run(capsys, "compare", a, a, b, "--plot", png)
     assert code == 0, err
     lines = out.splitlines()
-    assert lines[0].split() == ["area", "width", "height"]
-    same = [float(v) for v in lines[1].split()[-3:]]
-    other = [float(v) for v in lines[2].split()[-3:]]
-    assert same == [0.0, 0.0, 0.0]
+    assert lines[0].split() == ["L2_area", "L2_width", "L2_height", "r_area", "r_width", "r_height",
+                                "lag_frames", "r_height_at_lag"]
+    same = [float(v) for v in lines[1].split()[-8:]]
+    other = [float(v) for v in lines[2].split()[-8:]]
+    assert same[:3] == [0.0, 0.0, 0.0] and same[3:6] == [1.0, 1.0, 1.0] and same[6] == 0
     assert other[1] > 0.3                  # merges at 13/30 s vs 13/25 s: width differs
     assert png.stat().st_size > 10_000
 

@@ -214,6 +214,70 @@ def l2_distance(a: pd.DataFrame, b: pd.DataFrame, columns: Iterable[str] = METRI
     return out
 
 
+def _common_grid(a: pd.DataFrame, b: pd.DataFrame) -> tuple[np.ndarray, float]:
+    """Sample times of the lower-rate profile and its frame period."""
+    ref = a if _fps(a) <= _fps(b) else b
+    return ref["time"].to_numpy(float), 1.0 / _fps(ref)
+
+
+def pearson(x: np.ndarray, y: np.ndarray) -> float:
+    """Pearson correlation :math:`r = \\mathrm{cov}(x, y) / (\\sigma_x \\sigma_y)`; NaN if either is constant."""
+    x = np.asarray(x, float) - np.mean(x)
+    y = np.asarray(y, float) - np.mean(y)
+    den = np.sqrt(np.sum(x * x) * np.sum(y * y))
+    return float(np.sum(x * y) / den) if den > 1e-15 else float("nan")
+
+
+def lagged(a: pd.DataFrame, b: pd.DataFrame, column: str, lag: int) -> tuple[np.ndarray, np.ndarray]:
+    """``a(t)`` and ``b(t + lag * dt)`` on the common grid where both are defined.
+
+    ``dt`` is the frame period of the lower-rate profile; a positive ``lag``
+    means ``b`` is late (its events happen ``lag`` frames after ``a``'s).
+    """
+    grid, dt = _common_grid(a, b)
+    ta, tb = a["time"].to_numpy(float), b["time"].to_numpy(float)
+    shifted = grid + lag * dt
+    eps = 1e-9 * max(1.0, float(np.abs(grid).max(initial=0.0)))
+    ok = (grid >= ta[0] - eps) & (grid <= ta[-1] + eps) & (shifted >= tb[0] - eps) & (shifted <= tb[-1] + eps)
+    va = np.interp(grid[ok], ta, a[column].to_numpy(float))
+    vb = np.interp(shifted[ok], tb, b[column].to_numpy(float))
+    return va, vb
+
+
+def correlation(a: pd.DataFrame, b: pd.DataFrame, columns: Iterable[str] = METRICS, column: str = "height",
+                max_lag: int = 5) -> dict:
+    """Pearson correlation of two profiles and the time offset that maximises it.
+
+    Returns ``{"r": {column: r at lag 0}, "lag": k, "lag_s": k * dt, "r_lag": r of ``column`` at k}``,
+    with ``k`` the integer lag in ``[-max_lag, max_lag]`` frames (of the lower-rate profile) maximising
+    the correlation of ``column`` between ``a(t)`` and ``b(t + k dt)`` (see :func:`lagged`); at
+    least 3 common samples are needed for a lag to count.
+    """
+    if max_lag < 0:
+        raise InputError(f"max_lag must be >= 0, got {max_lag}")
+    for name, df in (("first", a), ("second", b)):
+        missing = [c for c in ("time", *columns, column) if c not in df.columns]
+        if missing:
+            raise InputError(f"{name} profile lacks column(s) {', '.join(missing)}")
+    r0 = {c: pearson(*lagged(a, b, c, 0)) for c in columns}
+    best, best_r = 0, -np.inf
+    for k in range(-max_lag, max_lag + 1):
+        va, vb = lagged(a, b, column, k)
+        r = pearson(va, vb) if va.size >= 3 else float("nan")
+        if np.isfinite(r) and (r > best_r + 1e-12 or (abs(r - best_r) <= 1e-12 and abs(k) < abs(best))):
+            best, best_r = k, r
+    _, dt = _common_grid(a, b)
+    return {"r": r0, "lag": best, "lag_s": best * dt, "r_lag": best_r if np.isfinite(best_r) else float("nan")}
+
+
+def shifted_profile(df: pd.DataFrame, seconds: float) -> pd.DataFrame:
+    """Copy of a profile with its times moved by ``-seconds`` (undo a lag for plotting)."""
+    out = df.copy()
+    out["time"] = out["time"] - seconds
+    out.attrs.update(df.attrs)
+    return out
+
+
 def plot_profiles(profiles: Mapping[str, pd.DataFrame], path: str | Path,
                   metrics: Iterable[str] = ("count", "area", "width", "height", "d_area", "d_width"),
                   title: str | None = None, force: bool = False) -> None:
