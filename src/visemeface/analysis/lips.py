@@ -26,7 +26,7 @@ colour and calls *opening* whatever lies between the upper and the lower lip:
    :math:`E = \\neg L \\wedge \\mathrm{cummax}_{\\downarrow} L \\wedge \\mathrm{cummax}_{\\uparrow} L`.
    Teeth, tongue and cavity are all included; a moustache or the nostrils lie
    above the upper lip and never are.
-6. A connected region nowhere ``min_height`` :math:`\\cdot w` thick is the
+6. A connected region less than ``min_height`` :math:`\\cdot w` thick is the
    seam between closed lips (a dark line one or two pixels high), not an
    opening; nor is one touching the analysed region's border or lying wholly
    below the box (see :func:`plausible_openings`), nor one with nothing darker
@@ -42,7 +42,7 @@ import cv2
 import numpy as np
 
 #: The mouth is resampled to at least this width (px) before segmentation.
-WORK_WIDTH = 160
+WORK_WIDTH = 120
 
 
 def work_scale(mouth_width: float) -> float:
@@ -104,7 +104,9 @@ def lip_mask(crop: np.ndarray, box_in_crop: tuple[int, int, int, int], scale: fl
     cx0, cx1 = bx + bw // 4, bx + bw - bw // 4
     for i in range(1, n):
         x, y, w, h, area = stats[i]
-        keep[i] = x < cx1 and x + w > cx0 and y < by + bh and y + h > by and area >= 0.002 * bw * bw
+        # In the box's rows, or a wide lip just below them (the lower lip of a dropped jaw).
+        rows = y < by + bh and y + h > by or (by + bh <= y <= by + bh + 0.5 * bw and w >= 0.4 * bw)
+        keep[i] = x < cx1 and x + w > cx0 and rows and area >= 0.002 * bw * bw
     if keep.any():          # a nostril or a fleck of red skin beside the lips is not a lip
         keep &= stats[:, cv2.CC_STAT_AREA] >= 0.1 * stats[keep, cv2.CC_STAT_AREA].max()
     return keep[labels], t
@@ -192,8 +194,9 @@ def not_seam(opening: np.ndarray, lips: np.ndarray, crop: np.ndarray) -> np.ndar
 def plausible_openings(opening: np.ndarray, box, min_px: float) -> np.ndarray:
     """Keep the connected regions of a 0/1 uint8 mask that can be a mouth opening (0/1 uint8).
 
-    A region is dropped when it is nowhere ``min_px`` thick (its tallest
-    column; the seam of closed lips is a long thin curve), touches the border
+    A region is dropped when it is less than ``min_px`` thick (the 90th
+    percentile of its column heights: the seam of closed lips is a long thin
+    curve, perhaps with a blob at a corner), touches the border
     of the analysed region (an opening is surrounded by lips; skin folds at the
     crop's edge are not), or lies wholly below the mouth box ``(x, y, w, h)``
     (skin between the lower lip and a reddish chin).
@@ -204,6 +207,6 @@ def plausible_openings(opening: np.ndarray, box, min_px: float) -> np.ndarray:
     keep = (h >= min_px) & (x > 0) & (y > 0) & (x + w < cols) & (y + h < rows) & (y < box[1] + box[3])
     keep[0] = False
     for i in np.flatnonzero(keep):
-        sub = labels[y[i]:y[i] + h[i], x[i]:x[i] + w[i]] == i
-        keep[i] = sub.sum(axis=0).max() >= min_px
+        cols = (labels[y[i]:y[i] + h[i], x[i]:x[i] + w[i]] == i).sum(axis=0)
+        keep[i] = np.percentile(cols[cols > 0], 90) >= min_px
     return keep[labels].view(np.uint8)

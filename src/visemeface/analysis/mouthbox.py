@@ -7,7 +7,7 @@ colour, the same cue the lip segmentation uses:
 1. *Face*: skin pixels in YCrCb, :math:`135 \\le C_r \\le 185`,
    :math:`70 \\le C_b \\le 135`, :math:`Y \\ge 40` (the classic skin cluster of
    Chai & Ngan, widened for a warm camera); the largest 8-connected skin region
-   of the frame (downscaled to at most 400 px wide), holes (eyes, mouth) filled. It must cover at
+   of the frame (subsampled to at most 200 px wide), holes (eyes, mouth) filled. It must cover at
    least ``min_face`` of the frame, or there is no face.
 2. *Lips*: inside the lower half of the face's bounding box (rows 0.5-0.95 of
    its height, columns 0.2-0.8 of its width) the Lab :math:`a^*` channel is
@@ -67,15 +67,20 @@ def face_mask(rgb: np.ndarray, min_face: float = 0.02) -> tuple[np.ndarray, tupl
 def find_lips(rgb: np.ndarray, min_face: float = 0.02) -> tuple[float, float, float, float] | None:
     """Lip extent ``(x_left, x_right, y_top, y_bottom)`` in frame pixels, or None (no face or no lips).
 
-    Works on a frame downscaled to at most 400 px wide; see the module notes.
+    The face is found on a frame subsampled to at most 200 px wide, the lips on
+    one at most 400 px wide; see the module notes.
     """
     h0, w0 = rgb.shape[:2]
     f = max(1, int(np.ceil(w0 / 400)))
+    k = max(1, int(np.ceil(w0 / 200 / f)))          # the face's grid is k times coarser than the lips'
     small = rgb[::f, ::f] if f > 1 else rgb
-    found = face_mask(np.ascontiguousarray(small), min_face)
+    found = face_mask(np.ascontiguousarray(small[::k, ::k]), min_face)
     if found is None:
         return None
-    face, (fx, fy, fw, fh) = found
+    coarse, (fx, fy, fw, fh) = found
+    fx, fy, fw, fh = fx * k, fy * k, min(fw * k, small.shape[1] - fx * k), min(fh * k, small.shape[0] - fy * k)
+    face = cv2.resize(coarse.view(np.uint8), (fw, fh), interpolation=cv2.INTER_NEAREST).view(bool) \
+        if k > 1 else coarse
     y0, y1 = int(0.5 * fh), int(0.95 * fh)
     x0, x1 = int(0.2 * fw), int(0.8 * fw)
     if y1 - y0 < 4 or x1 - x0 < 4:
