@@ -43,6 +43,7 @@ True
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import cv2
@@ -112,6 +113,8 @@ class Openings:
         The natural mouth width ``w`` in pixels.
     threshold : float or None
         The grey level used (None when Otsu found no dark class: no opening).
+    box : MouthBox or None
+        The mouth box the frame was measured in.
     """
 
     area: np.ndarray
@@ -120,6 +123,7 @@ class Openings:
     contours: tuple = field(repr=False)
     mouth_width: int
     threshold: float | None
+    box: MouthBox | None = None
 
     @property
     def count(self) -> int:
@@ -359,7 +363,7 @@ class OpeningDetector:
             mask, t, scale = lips_opening_mask(np.ascontiguousarray(crop, dtype=np.uint8),
                                                (box.x - x0, box.y - y0, box.w, box.h), w, self.min_height,
                                                self.min_chroma, dark_level=dark)
-        return self.measure(mask, t, w, scale, (x0, y0))
+        return dataclasses.replace(self.measure(mask, t, w, scale, (x0, y0)), box=box)
 
     def measure(self, mask: np.ndarray, t, w: int, scale: float, origin) -> Openings:
         """Openings of a uint8 ``mask`` drawn at ``scale`` x the frame, its corner at frame ``origin``."""

@@ -104,6 +104,41 @@ def analyze_frames(frames: Iterable[np.ndarray], box, fps: float, detector: Open
     return profile_from_openings(found, fps, source)
 
 
+#: A clip whose decoded frames take at most this many bytes is decoded once and kept in memory
+#: when the mouth box is found automatically (otherwise it is decoded twice: find, then measure).
+BUFFER_BYTES = 512 * 2 ** 20
+
+
+def analyze_source(source, box=None, detector: OpeningDetector | None = None,
+                   on_frame: Callable[[int, np.ndarray, Openings], None] | None = None,
+                   show_progress: bool = False) -> tuple[pd.DataFrame, list | None]:
+    """Profile of a :class:`~visemeface.analysis.video.FrameSource`, and the per-frame boxes if found here.
+
+    With ``box=None`` the mouth is found in every frame
+    (:func:`~visemeface.analysis.mouthbox.track_mouth`) before it is measured;
+    the frames are decoded once when they fit in :data:`BUFFER_BYTES`.
+    """
+    from visemeface.outputs import progress
+
+    def frames(desc):
+        return progress(source.frames(), total=source.n_frames, desc=desc, show=show_progress)
+
+    if box is not None:
+        return analyze_frames(frames("analyze"), box, source.fps, detector, on_frame, str(source.path)), None
+    from visemeface.analysis.mouthbox import track_mouth
+
+    w, h = source.size
+    small = source.n_frames is not None and (source.n_frames + 2) * w * h * 3 <= BUFFER_BYTES
+    if small:
+        kept = list(frames("decode"))
+        boxes = track_mouth(kept, source=str(source.path))
+        todo = kept
+    else:
+        boxes = track_mouth(frames("find mouth"), source=str(source.path))
+        todo = frames("analyze")
+    return analyze_frames(todo, boxes, source.fps, detector, on_frame, str(source.path)), boxes
+
+
 class _Repeat:
     """The same box for every frame."""
 

@@ -86,7 +86,7 @@ def run(args) -> int:
     import cv2
 
     from visemeface.analysis.openings import OpeningDetector, draw_openings
-    from visemeface.analysis.profiles import analyze_frames, plot_profiles, write_profile
+    from visemeface.analysis.profiles import analyze_source, plot_profiles, write_profile
     from visemeface.analysis.video import open_frames, parse_box, read_sidecar, sidecar_path
     from visemeface.errors import InputError
     from visemeface.outputs import atomic_dir, check_new, check_suffix, progress
@@ -127,14 +127,6 @@ def run(args) -> int:
     except InputError:
         source.close()
         raise
-    if box is None:
-        from visemeface.analysis.mouthbox import track_mouth
-
-        boxes = track_mouth(progress(source.frames(), total=source.n_frames, desc="find mouth"),
-                            source=str(args.input))
-    else:
-        boxes = None
-
     with contextlib.ExitStack() as stack:
         on_frame = None
         if args.overlay:
@@ -144,16 +136,13 @@ def run(args) -> int:
             margin = [max(p, 0.15) for p in detector.pad]
 
             def on_frame(i, frame, openings):
-                b = boxes[i] if boxes is not None else box
                 # The overlay shows the mouth box with a margin, like seed 001 Figs. 7-15.
-                x0, y0, x1, y1 = b.region(margin, *source.size)
-                img = draw_openings(frame, openings, b, f"frame {i}")[y0:y1, x0:x1]
+                x0, y0, x1, y1 = openings.box.region(margin, *source.size)
+                img = draw_openings(frame, openings, openings.box, f"frame {i}")[y0:y1, x0:x1]
                 if not cv2.imwrite(str(overlay_dir / frame_name(i)), cv2.cvtColor(img, cv2.COLOR_RGB2BGR)):
                     raise InputError("cannot write overlay frame", overlay_dir)
 
-        frames = progress(source.frames(), total=source.n_frames, desc="analyze")
-        df = analyze_frames(frames, boxes if boxes is not None else box, source.fps, detector, on_frame,
-                            source=str(args.input))
+        df, boxes = analyze_source(source, box, detector, on_frame, show_progress=True)
     write_profile(df, args.output, args.force)
     if args.plot:
         plot_profiles({Path(args.input).name: df}, args.plot, title=f"mouth openings: {Path(args.input).name}",
