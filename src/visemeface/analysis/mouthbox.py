@@ -16,7 +16,9 @@ colour, the same cue the lip segmentation uses:
    the mouth (the nose and the cheeks are above it), joined with a lip region
    straight above or below it (lips parted by an opening). Its left and right
    extremes are the corners.
-3. *Tracking*: every frame is searched again (no drift), and the box centre
+3. *Tracking*: the face is found again every ``face_every`` frames (it moves
+   little in 0.2 s) and at once when the lips are lost; the lips are searched
+   in every frame (no drift), and the box centre
    is median-filtered over ``smooth`` frames; the box width -- the *natural
    mouth width* that normalises every metric -- is the median of the per-frame
    widths over the whole clip, so a wide-open or rounded frame does not
@@ -64,23 +66,42 @@ def face_mask(rgb: np.ndarray, min_face: float = 0.02) -> tuple[np.ndarray, tupl
     return filled.view(bool), (x, y, w, h)
 
 
-def find_lips(rgb: np.ndarray, min_face: float = 0.02) -> tuple[float, float, float, float] | None:
-    """Lip extent ``(x_left, x_right, y_top, y_bottom)`` in frame pixels, or None (no face or no lips).
+def _subsample(img: np.ndarray, k: int) -> np.ndarray:
+    """Every ``k``-th pixel of every ``k``-th row (nearest neighbour), contiguous."""
+    if k <= 1:
+        return np.ascontiguousarray(img)
+    h, w = img.shape[:2]
+    return cv2.resize(img, ((w + k - 1) // k, (h + k - 1) // k), interpolation=cv2.INTER_NEAREST)
 
-    The face is found on a frame subsampled to at most 200 px wide, the lips on
-    one at most 400 px wide; see the module notes.
-    """
-    h0, w0 = rgb.shape[:2]
-    f = max(1, int(np.ceil(w0 / 400)))
-    k = max(1, int(np.ceil(w0 / 200 / f)))          # the face's grid is k times coarser than the lips'
-    small = rgb[::f, ::f] if f > 1 else rgb
-    found = face_mask(np.ascontiguousarray(small[::k, ::k]), min_face)
+
+def find_face(rgb: np.ndarray, min_face: float = 0.02):
+    """The face for :func:`find_lips`: its skin mask and box on the lips' grid, or None."""
+    f = max(1, int(np.ceil(rgb.shape[1] / 400)))
+    k = max(1, int(np.ceil(rgb.shape[1] / 200 / f)))          # the face's grid is k times coarser
+    found = face_mask(_subsample(rgb, f * k), min_face)
     if found is None:
         return None
     coarse, (fx, fy, fw, fh) = found
-    fx, fy, fw, fh = fx * k, fy * k, min(fw * k, small.shape[1] - fx * k), min(fh * k, small.shape[0] - fy * k)
+    hs, ws = (rgb.shape[0] + f - 1) // f, (rgb.shape[1] + f - 1) // f
+    fx, fy, fw, fh = fx * k, fy * k, min(fw * k, ws - fx * k), min(fh * k, hs - fy * k)
     face = cv2.resize(coarse.view(np.uint8), (fw, fh), interpolation=cv2.INTER_NEAREST).view(bool) \
         if k > 1 else coarse
+    return face, (fx, fy, fw, fh)
+
+
+def find_lips(rgb: np.ndarray, min_face: float = 0.02, face=None) -> tuple[float, float, float, float] | None:
+    """Lip extent ``(x_left, x_right, y_top, y_bottom)`` in frame pixels, or None (no face or no lips).
+
+    The face (:func:`find_face`, or ``face`` found in a nearby frame) is
+    found on a frame subsampled to at most 200 px wide, the lips on one at most
+    400 px wide; see the module notes.
+    """
+    f = max(1, int(np.ceil(rgb.shape[1] / 400)))
+    small = _subsample(rgb, f)
+    found = face if face is not None else find_face(rgb, min_face)
+    if found is None:
+        return None
+    face, (fx, fy, fw, fh) = found
     y0, y1 = int(0.5 * fh), int(0.95 * fh)
     x0, x1 = int(0.2 * fw), int(0.8 * fw)
     if y1 - y0 < 4 or x1 - x0 < 4:
@@ -130,12 +151,19 @@ def _median_filter(v: np.ndarray, k: int) -> np.ndarray:
 
 
 def track_mouth(frames: Iterable[np.ndarray], smooth: int = 5, min_face: float = 0.02,
-                source: str = "") -> list[MouthBox]:
+                source: str = "", face_every: int = 5) -> list[MouthBox]:
     """One mouth box per frame (see the module notes); raises InputError if no frame shows a face."""
-    found, size = [], None
+    found, size, face, age = [], None, None, 0
     for frame in frames:
         size = frame.shape[1], frame.shape[0]
-        found.append(find_lips(frame, min_face))
+        if face is None or age >= face_every:
+            face, age = find_face(frame, min_face), 0
+        lips = find_lips(frame, min_face, face) if face is not None else None
+        if lips is None and age > 0:            # lost: look for the face again
+            face, age = find_face(frame, min_face), 0
+            lips = find_lips(frame, min_face, face) if face is not None else None
+        age += 1
+        found.append(lips)
     where = f" in {source}" if source else ""
     if not found:
         raise InputError(f"no frames{where}")
