@@ -87,3 +87,20 @@ def test_mouth_crops_count_one_opening_when_open(realdata):
     lab = lab[lab["clip"] == "bbaf2n"]
     counts = df["count"].to_numpy()[lab["frame"].to_numpy()]
     np.testing.assert_array_equal(counts, lab["open"].to_numpy())
+
+
+def test_automatic_box_edges_near_the_mouth_corners(realdata):
+    """The automatic box's edges lie within 5 px (about 0.13 w) of the hand-read corners.
+
+    Not yet the issue's "covers both corners on every frame": on bbaf2n the right corner (where the
+    lip line fades into a crease) lies up to 5 px beyond the box; the opening detector analyses the
+    box plus 0.1 w on each side.
+    """
+    corners = pd.read_csv(LABELS.with_name("realdata_corners.csv"), comment="#")
+    off = []
+    for clip in CLIPS:
+        boxes = track_mouth(list(open_frames(realdata / f"{clip}.mpg").frames()), source=clip)
+        for r in corners[corners["clip"] == clip].itertuples():
+            b = boxes[r.frame]
+            off += [b.x - r.left_x, b.x + b.w - 1 - r.right_x]
+    assert np.abs(off).max() <= 5, off

@@ -22,8 +22,12 @@ colour, the same cue the lip segmentation uses:
    is median-filtered over ``smooth`` frames; the box width -- the *natural
    mouth width* that normalises every metric -- is the median of the per-frame
    widths over the whole clip, so a wide-open or rounded frame does not
-   change the scale. The red region stops short of the corners, where the
-   lips thin to a dark line, so ``w`` is :data:`WIDEN` times its width. The box
+   change the scale. Every ``refine_every``-th frame the lips are segmented
+   around the red region as the opening detector does
+   (:func:`~visemeface.analysis.lips.lip_mask`: skin vs lips inside the box,
+   not the whole face), which sets the width and re-centres the box: the
+   face-wide red region can take in flushed skin. Their colour fades out just
+   before the corners, so ``w`` is :data:`WIDEN` times their width. The box
    reaches from ``0.15 w`` above the red region (the paler upper vermilion) to
    its bottom; :class:`~visemeface.analysis.openings.OpeningDetector` pads it.
 
@@ -42,9 +46,9 @@ from visemeface.analysis.openings import MouthBox
 from visemeface.errors import InputError
 
 
-#: Box width / red-region width. Tuned on the three GRID clips of ../shared/realdata: the hand-read
-#: corners lie 1-3 px beyond the red region of a 35-40 px mouth on each side.
-WIDEN = 1.15
+#: Box width / width of the segmented lips. Tuned on the three GRID clips of ../shared/realdata:
+#: the lips' colour fades out 1-3 px before the hand-read corners of a 35-40 px mouth.
+WIDEN = 1.12
 
 
 def face_mask(rgb: np.ndarray, min_face: float = 0.02) -> tuple[np.ndarray, tuple] | None:
@@ -150,10 +154,29 @@ def _median_filter(v: np.ndarray, k: int) -> np.ndarray:
     return np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * r + 1), axis=1)
 
 
+def lip_extent(frame: np.ndarray, red) -> tuple[float, float, float] | None:
+    """Left and right end of the lips segmented by :func:`~visemeface.analysis.lips.lip_mask`
+    around a red region ``(x_left, x_right, y_top, y_bottom)``, and the region's centre x."""
+    from visemeface.analysis.lips import lip_mask, work_scale
+
+    x_l, x_r, y_t, y_b = red
+    w = max(4.0, x_r - x_l)
+    box = MouthBox.of((x_l, y_t - 0.15 * w, w, y_b - y_t + 0.15 * w))
+    x0, y0 = max(0, int(box.x - 0.25 * w)), max(0, int(box.y - 0.1 * w))
+    x1, y1 = min(frame.shape[1], int(box.x + 1.25 * w)), min(frame.shape[0], int(box.y + box.h + 0.4 * w))
+    s = work_scale(box.w)
+    crop = cv2.resize(np.ascontiguousarray(frame[y0:y1, x0:x1]), None, fx=s, fy=s, interpolation=cv2.INTER_LINEAR)
+    lips, t = lip_mask(crop, tuple(int(round(v * s)) for v in (box.x - x0, box.y - y0, box.w, box.h)), s)
+    cols = np.flatnonzero(lips.any(axis=0))
+    if t is None or cols.size < 2:
+        return None
+    return (cols[0] + 0.5) / s - 0.5 + x0, (cols[-1] + 0.5) / s - 0.5 + x0, (x_l + x_r) / 2
+
+
 def track_mouth(frames: Iterable[np.ndarray], smooth: int = 5, min_face: float = 0.02,
-                source: str = "", face_every: int = 5) -> list[MouthBox]:
+                source: str = "", face_every: int = 5, refine_every: int = 5) -> list[MouthBox]:
     """One mouth box per frame (see the module notes); raises InputError if no frame shows a face."""
-    found, size, face, age = [], None, None, 0
+    found, size, face, age, fine = [], None, None, 0, []
     for frame in frames:
         size = frame.shape[1], frame.shape[0]
         if face is None or age >= face_every:
@@ -164,6 +187,8 @@ def track_mouth(frames: Iterable[np.ndarray], smooth: int = 5, min_face: float =
             lips = find_lips(frame, min_face, face) if face is not None else None
         age += 1
         found.append(lips)
+        if lips is not None and len(found) % refine_every == 1:
+            fine.append(lip_extent(frame, lips))
     where = f" in {source}" if source else ""
     if not found:
         raise InputError(f"no frames{where}")
@@ -174,10 +199,15 @@ def track_mouth(frames: Iterable[np.ndarray], smooth: int = 5, min_face: float =
     idx = np.arange(len(found))
     for j in range(4):           # frames without lips: interpolate from their neighbours
         ext[:, j] = np.interp(idx, idx[ok], ext[ok, j])
-    # The red region stops short of the corners, where the lips thin to a dark
-    # line: the box is WIDEN times the region's width (see WIDEN).
-    width = WIDEN * float(np.median(ext[:, 1] - ext[:, 0]))
     cx = _median_filter((ext[:, 0] + ext[:, 1]) / 2, smooth)
+    fine = np.array([f for f in fine if f is not None], float).reshape(-1, 3)
+    if len(fine):
+        # The lips as the opening detector segments them (the box's own skin/lip split) set the
+        # width and shift the centre: the face-wide red region can take in flushed skin.
+        width = WIDEN * float(np.median(fine[:, 1] - fine[:, 0]))
+        cx = cx + float(np.median((fine[:, 0] + fine[:, 1]) / 2 - fine[:, 2]))
+    else:
+        width = WIDEN * float(np.median(ext[:, 1] - ext[:, 0]))
     top = _median_filter(ext[:, 2], smooth)
     bottom = _median_filter(ext[:, 3], smooth)
     w = max(4, int(round(width)))
