@@ -184,8 +184,8 @@ def not_seam(opening: np.ndarray, lips: np.ndarray, crop: np.ndarray) -> np.ndar
     last = np.where(unlike, rows, -1).max(axis=0)
     span = ((rows >= first) & (rows <= last) & kept).view(np.uint8)
     # Columns of shaded lip between two teeth would split one opening in two: bridge gaps of up
-    # to a quarter of the region's width, inside the untrimmed region.
-    k = _odd(0.25 * max(1, int(np.count_nonzero(kept.any(axis=0)))))
+    # to half the regions' width, inside the untrimmed region.
+    k = _odd(0.5 * max(1, int(np.count_nonzero(kept.any(axis=0)))))
     if k > 1:
         span = cv2.morphologyEx(span, cv2.MORPH_CLOSE, np.ones((1, k), np.uint8)) & kept.view(np.uint8)
     return span
