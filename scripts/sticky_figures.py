@@ -91,11 +91,12 @@ def fig_calibration(fem, rig, fps=400, tracking=0.0):
 
 def mouth_profile(fem, frames, fps, size=512):
     """Seed-001 analysis of the rendered frames: width (mouth widths) and count per frame, and a strip."""
+    from visemeface.analysis.openings import OpeningDetector
     from visemeface.analysis.profiles import analyze_frames
     from visemeface.render.renderer import Renderer
     r = Renderer(fem.face, size=(size, size), view="mouth")
     imgs = [r.render(f["d"]) for f in frames]
-    prof = analyze_frames(imgs, r.mouth_box(), fps)
+    prof = analyze_frames(imgs, r.mouth_box(), fps, OpeningDetector(method="seed"))   # the published figures
     return prof, imgs
 
 

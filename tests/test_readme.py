@@ -21,6 +21,8 @@ import pytest
 pytestmark = pytest.mark.slow
 
 ROOT = Path(__file__).resolve().parents[1]
+#: ``../shared`` beside the repository (the real GRID clips a README line analyses).
+SHARED = ROOT.parent / "shared"
 
 
 def readme_commands():
@@ -31,7 +33,7 @@ def readme_commands():
         for line in block.replace("\\\n", " ").splitlines():       # continuation lines joined
             argv = shlex.split(line, comments=True)
             if argv and argv[0].endswith("visemeface"):
-                commands.append(argv[1:])
+                commands.append([a.replace("../shared/", str(SHARED) + "/") for a in argv[1:]])
     return commands
 
 
@@ -67,6 +69,8 @@ def test_readme_commands_run_top_to_bottom_in_a_fresh_folder(tmp_path):
     for argv in readme_commands():
         if _physics(argv):
             continue
+        if any(str(SHARED) in a for a in argv) and not SHARED.is_dir():
+            continue                                  # the real clips are not here
         proc = subprocess.run([sys.executable, "-m", "visemeface", *argv, "-q"] if _quiet(argv) else
                               [sys.executable, "-m", "visemeface", *argv], cwd=tmp_path, capture_output=True,
                               text=True, timeout=300)

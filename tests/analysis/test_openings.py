@@ -64,8 +64,8 @@ def test_teeth_at_the_edge_are_absorbed_only_with_teeth_handling():
     e = Ellipse(256, 256, 70, 24)
     upper_teeth = np.mgrid[:SIZE[0], :SIZE[1]][0] < 256 - 12     # white band under the upper lip
     img = mouth_image(SIZE, BOX, [e], teeth=[upper_teeth], specks=5, seed=3)
-    without = detect_openings(img, BOX)
-    with_teeth = detect_openings(img, BOX, teeth=True)
+    without = detect_openings(img, BOX, method="seed")
+    with_teeth = detect_openings(img, BOX, method="seed", teeth=True)
     assert without.count == with_teeth.count == 1
     assert without.largest_area * W * W < 0.9 * e.area            # teeth read as lip
     assert with_teeth.largest_area * W * W == pytest.approx(e.area, rel=0.03)
@@ -75,14 +75,31 @@ def test_teeth_at_the_edge_are_absorbed_only_with_teeth_handling():
 def test_teeth_handling_leaves_a_closed_mouth_closed():
     img = mouth_image(SIZE, BOX, [], seed=5)
     img[240:250, 200:230] = 245             # a white highlight on the lips, no cavity next to it
-    assert detect_openings(img, BOX, teeth=True).count == 0
+    assert detect_openings(img, BOX, method="seed", teeth=True).count == 0
+
+
+def test_lips_method_counts_teeth_and_tongue_between_the_lips():
+    """The default method: everything enclosed between the lips is opening, without --teeth."""
+    e = Ellipse(256, 256, 70, 24)
+    upper_teeth = np.mgrid[:SIZE[0], :SIZE[1]][0] < 256 - 12
+    img = mouth_image(SIZE, BOX, [e], teeth=[upper_teeth], tongues=[Ellipse(256, 262, 30, 10)], seed=3)
+    op = detect_openings(img, BOX)
+    assert op.count == 1
+    assert op.largest_area * W * W == pytest.approx(e.area, rel=0.03)
+    assert abs(op.largest_height * W - 2 * e.b) <= 2
+
+
+def test_lips_method_ignores_the_seam_of_closed_lips():
+    img = mouth_image(SIZE, BOX, [Ellipse(256, 256, 150, 3)], noise=6.0, seed=4)      # 6 px high dark seam
+    assert detect_openings(img, BOX).count == 0
+    assert detect_openings(img, BOX, min_height=0).count == 1
 
 
 def test_convex_hull_fills_a_notch():
     e = Ellipse(256, 256, 70, 24)
     img = mouth_image(SIZE, BOX, [e], teeth=[Ellipse(256, 232, 20, 12)], seed=4)
-    plain = detect_openings(img, BOX)
-    hull = detect_openings(img, BOX, hull=True)
+    plain = detect_openings(img, BOX, method="seed")
+    hull = detect_openings(img, BOX, method="seed", hull=True)
     assert plain.largest_area * W * W < 0.95 * e.area
     assert hull.largest_area * W * W == pytest.approx(e.area, rel=0.03)
     assert hull.largest_area >= plain.largest_area
@@ -99,7 +116,7 @@ def test_closed_mouth_gives_count_zero(threshold):
 def test_uniform_noise_is_not_an_opening():
     rng = np.random.default_rng(0)
     img = np.clip(rng.normal(120, 20, (128, 128, 3)), 0, 255).astype(np.uint8)
-    assert detect_openings(img, (0, 0, 128, 128)).count == 0
+    assert detect_openings(img, (0, 0, 128, 128), method="seed").count == 0
 
 
 def test_fixed_threshold_matches_otsu_on_clean_contrast():
@@ -113,7 +130,7 @@ def test_min_area_drops_specks_only():
     small = Ellipse(150, 256, 4, 4)                # ~50 px = 3.1e-4 w^2
     img = mouth_image(SIZE, BOX, [Ellipse(300, 256, 40, 15), small], noise=3.0, seed=8)
     assert detect_openings(img, BOX).count == 1                  # default 5e-4 w^2 = 80 px
-    assert detect_openings(img, BOX, min_area=1e-4).count == 2
+    assert detect_openings(img, BOX, min_area=1e-4, min_height=0).count == 2
 
 
 def test_otsu_three_levels_lands_on_the_darkest():
@@ -208,17 +225,18 @@ def test_rendered_face_closed_then_opening():
     assert found[2].largest_width > 0.6                     # the opening spans most of the mouth
 
 
-@pytest.mark.parametrize("hull,teeth", [(False, False), (True, True)])
-def test_translation_and_mirror_invariance(hull, teeth):
+@pytest.mark.parametrize("method,hull,teeth", [("lips", False, False), ("seed", False, False),
+                                               ("seed", True, True)])
+def test_translation_and_mirror_invariance(method, hull, teeth):
     """Moving the frame content with the box, or mirroring both, changes no metric."""
     img = mouth_image((400, 400), (50, 150, 300, 100),
                       [Ellipse(130, 200, 30, 12), Ellipse(220, 202, 45, 18)], specks=6, seed=12)
     box = (50, 150, 300, 100)
-    ref = detect_openings(img, box, hull=hull, teeth=teeth)
+    ref = detect_openings(img, box, hull=hull, teeth=teeth, method=method)
     moved = np.zeros((460, 430, 3), np.uint8)
     moved[37:437, 21:421] = img
-    shifted = detect_openings(moved, (71, 187, 300, 100), hull=hull, teeth=teeth)
-    mirrored = detect_openings(img[:, ::-1], (400 - 50 - 300, 150, 300, 100), hull=hull, teeth=teeth)
+    shifted = detect_openings(moved, (71, 187, 300, 100), hull=hull, teeth=teeth, method=method)
+    mirrored = detect_openings(img[:, ::-1], (400 - 50 - 300, 150, 300, 100), hull=hull, teeth=teeth, method=method)
     assert ref.count == shifted.count == mirrored.count == 2
     for other in (shifted, mirrored):
         np.testing.assert_array_equal(other.area, ref.area)

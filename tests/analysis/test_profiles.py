@@ -145,3 +145,37 @@ def test_read_profile_refuses_empty_and_non_finite(tmp_path, body, match):
     p.write_text("frame,time,count,area,width,height\n" + body)
     with pytest.raises(InputError, match=match):
         read_profile(p)
+
+
+def _series_profile(values, fps=25.0, column="height"):
+    from visemeface.analysis.profiles import add_derivatives
+
+    v = np.asarray(values, float)
+    df = pd.DataFrame({"frame": np.arange(v.size), "time": np.arange(v.size) / fps, "count": (v > 0).astype(int),
+                       "area": v * 0.5, "width": v * 2, "height": v})
+    add_derivatives(df)
+    df.attrs["fps"] = fps
+    return df
+
+
+def test_correlation_finds_the_lag_of_a_delayed_copy():
+    from visemeface.analysis.profiles import correlation
+
+    rng = np.random.default_rng(3)
+    base = np.convolve(rng.random(80), np.ones(5) / 5, mode="same")
+    for lag in (-4, 0, 3):
+        a = _series_profile(base[10:70])
+        b = _series_profile(base[10 - lag:70 - lag])           # b(t) = a(t - lag): b is late by `lag` frames
+        c = correlation(a, b, max_lag=5)
+        assert c["lag"] == lag
+        assert c["r_lag"] == pytest.approx(1.0)
+        assert c["lag_s"] == pytest.approx(lag / 25.0)
+        if lag:
+            assert c["r"]["height"] < 0.99
+
+
+def test_correlation_of_a_constant_profile_is_nan_and_lag_zero():
+    from visemeface.analysis.profiles import correlation
+
+    c = correlation(_series_profile(np.zeros(20)), _series_profile(np.linspace(0, 1, 20)))
+    assert np.isnan(c["r"]["height"]) and c["lag"] == 0 and np.isnan(c["r_lag"])

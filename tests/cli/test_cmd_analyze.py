@@ -92,10 +92,11 @@ def test_compare_prints_l2_and_plots(tmp_path, capsys, frame_dir, video):
     code, out, err = _run(capsys, "compare", a, a, b, "--plot", png)
     assert code == 0, err
     lines = out.splitlines()
-    assert lines[0].split() == ["area", "width", "height"]
-    same = [float(v) for v in lines[1].split()[-3:]]
-    other = [float(v) for v in lines[2].split()[-3:]]
-    assert same == [0.0, 0.0, 0.0]
+    assert lines[0].split() == ["L2_area", "L2_width", "L2_height", "r_area", "r_width", "r_height",
+                                "lag_frames", "r_height_at_lag"]
+    same = [float(v) for v in lines[1].split()[-8:]]
+    other = [float(v) for v in lines[2].split()[-8:]]
+    assert same[:3] == [0.0, 0.0, 0.0] and same[3:6] == [1.0, 1.0, 1.0] and same[6] == 0
     assert other[1] > 0.3                  # merges at 13/30 s vs 13/25 s: width differs
     assert png.stat().st_size > 10_000
 
@@ -117,7 +118,14 @@ def test_bad_inputs_exit_2_with_one_line(tmp_path, capsys, frame_dir):
     assert "no .png/.jpg frames" in _error(capsys, "analyze", empty, "--box", BOX, "-o", out)
     assert "outside the 256x256 frame" in _error(capsys, "analyze", frame_dir, "--box", "100,100,200,100", "-o", out)
     assert "4 numbers" in _error(capsys, "analyze", frame_dir, "--box", "1,2,three,4", "-o", out)
-    assert "no mouth box" in _error(capsys, "analyze", frame_dir, "-o", out)
+    blue = tmp_path / "blue"               # no face in it: no automatic mouth box either
+    blue.mkdir()
+    for i in range(3):
+        cv2.imwrite(str(blue / f"b{i}.png"), np.full((64, 80, 3), (200, 120, 40), np.uint8))
+    err = _error(capsys, "analyze", blue, "-o", out)
+    assert "no face found" in err and "--box" in err
+    assert "--method" in _error(capsys, "analyze", frame_dir, "--box", BOX, "-o", out, "--method", "dark")
+    assert "min_height" in _error(capsys, "analyze", frame_dir, "--box", BOX, "-o", out, "--min-height", "2")
     assert "no such file" in _error(capsys, "analyze", tmp_path / "none.mp4", "--box", BOX, "-o", out)
     assert "--threshold" in _error(capsys, "analyze", frame_dir, "--box", BOX, "-o", out, "--threshold", "dark")
     assert "--pad" in _error(capsys, "analyze", frame_dir, "--box", BOX, "-o", out, "--pad", "a,b")
@@ -156,3 +164,22 @@ def test_folder_order_is_natural(frame_dir):
     assert [f.name for f in src.files][:3] == ["f0.png", "f1.png", "f2.png"]
     assert src.files[10].name == "f10.png" and src.fps == 12 and src.size == (256, 256)
     assert sorted(["f10", "f9", "F1"], key=natural_key) == ["F1", "f9", "f10"]
+
+
+@pytest.mark.realdata
+@pytest.mark.slow
+def test_analyze_real_clip_with_automatic_box(tmp_path, capsys, realdata):
+    """A real GRID clip without any box: the mouth is found, open frames are found open."""
+    csv, ov = tmp_path / "real.csv", tmp_path / "ov"
+    code, out, err = _run(capsys, "analyze", realdata / "swwp2s.mpg", "-o", csv, "--overlay", ov)
+    assert code == 0, err
+    assert "automatic mouth box" in out and "75 frames at 25 fps" in out
+    df = pd.read_csv(csv)
+    assert len(df) == 75 and len(list(ov.iterdir())) == 75
+    # "set white with p two soon", speech 0.49-2.21 s: open in most speech frames, closed after
+    speech = df[(df["time"] >= 0.5) & (df["time"] < 2.2)]
+    assert (speech["count"] > 0).mean() > 0.6
+    assert (df[df["time"] >= 2.4]["count"] == 0).all()
+    seed = tmp_path / "seed.csv"
+    assert _run(capsys, "analyze", realdata / "swwp2s.mpg", "-o", seed, "--method", "seed")[0] == 0
+    assert (pd.read_csv(seed)["count"] > 0).sum() < (df["count"] > 0).sum()

@@ -1,12 +1,18 @@
 """Mouth-opening evaluation (seed 001 §4): how a mouth opens, frame by frame.
 
-- :mod:`~visemeface.analysis.openings`: per-frame detection (Rec.601 grey,
-  median blur, dark threshold, top-level contours, optional convex hull and
-  teeth handling) and seed 001's metrics -- the number of openings and each
-  opening's area, width and height, normalised by the natural mouth width.
+- :mod:`~visemeface.analysis.openings`: per-frame detection and seed 001's
+  metrics -- the number of openings and each opening's area, width and
+  height, normalised by the natural mouth width; method ``"lips"`` (default,
+  :mod:`~visemeface.analysis.lips`: the region enclosed between the lips,
+  segmented by colour, teeth and tongue included) or ``"seed"`` (Rec.601
+  grey, median blur, dark threshold, top-level contours, optional convex hull
+  and teeth handling).
+- :mod:`~visemeface.analysis.mouthbox`: the mouth box found automatically in
+  every frame of a real video (face by skin colour, lips by redness).
 - :mod:`~visemeface.analysis.profiles`: those metrics over time as a
-  DataFrame with frame-difference derivatives, the L2 distance between two
-  profiles (aligned by time), CSV I/O and plots.
+  DataFrame with frame-difference derivatives, the L2 distance and the
+  Pearson correlation (with the best time offset) between two profiles
+  (aligned by time), CSV I/O and plots.
 - :mod:`~visemeface.analysis.video`: frames from a video file or an image
   folder, and the mouth-box sidecar JSON ``{"mouth_box": [x, y, w, h],
   "fps": ..., "size": [w, h]}``.

@@ -43,15 +43,20 @@ True
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
 
+from visemeface.analysis.lips import lips_opening_mask
 from visemeface.errors import InputError
 
 #: Rec.601 luma weights for (r, g, b).
 REC601 = (0.299, 0.587, 0.114)
+
+#: Opening detection methods: the region between the lips (default) and seed 001's grey threshold.
+METHODS = ("lips", "seed")
 
 
 @dataclass(frozen=True)
@@ -108,6 +113,8 @@ class Openings:
         The natural mouth width ``w`` in pixels.
     threshold : float or None
         The grey level used (None when Otsu found no dark class: no opening).
+    box : MouthBox or None
+        The mouth box the frame was measured in.
     """
 
     area: np.ndarray
@@ -116,6 +123,7 @@ class Openings:
     contours: tuple = field(repr=False)
     mouth_width: int
     threshold: float | None
+    box: MouthBox | None = None
 
     @property
     def count(self) -> int:
@@ -259,6 +267,18 @@ class OpeningDetector:
         HSV limits of :func:`teeth_mask`.
     pad : float or (left, top, right, bottom)
         Margins around the box that are analysed too, in units of ``w``.
+    method : "lips" or "seed"
+        ``"lips"`` (default): the opening is the region enclosed between the
+        lips, teeth and tongue included (:mod:`~visemeface.analysis.lips`);
+        ``threshold`` then only sets the dark-cavity level (a number) or keeps
+        it relative to the lips (``"otsu"``), and ``teeth`` is moot (teeth
+        between the lips always count). ``"seed"``: seed 001's grey threshold.
+    min_height : float
+        ``"lips"`` only: an opening thinner than this (fraction of ``w``) is the
+        seam of closed lips.
+    min_chroma : float
+        ``"lips"`` only: lips must be at least this much redder (Lab a*, 8-bit
+        levels) than the skin, or there is no mouth to measure.
     """
 
     threshold: str | float = "otsu"
@@ -270,8 +290,15 @@ class OpeningDetector:
     teeth_saturation: int = 60
     teeth_value: int = 150
     pad: tuple = (0.1, 0.1, 0.1, 0.4)
+    method: str = "lips"
+    min_height: float = 0.05
+    min_chroma: float = 6.0
 
     def __post_init__(self):
+        if self.method not in METHODS:
+            raise InputError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
+        if not (0 <= self.min_height < 1):
+            raise InputError(f"min_height must be in [0, 1) (fraction of mouth width), got {self.min_height}")
         if isinstance(self.threshold, str):
             if self.threshold != "otsu":
                 raise InputError(f"threshold must be a number 0..255 or 'otsu', got {self.threshold!r}")
@@ -327,13 +354,25 @@ class OpeningDetector:
         box = MouthBox.of(box)
         x0, y0, x1, y1 = box.region(self.pad, frame.shape[1], frame.shape[0])
         w = box.w
-        mask, t = self.opening_mask(frame[y0:y1, x0:x1], w)
+        crop = frame[y0:y1, x0:x1]
+        if self.method == "seed":
+            mask, t = self.opening_mask(crop, w)
+            scale = 1.0
+        else:
+            dark = None if self.threshold == "otsu" else float(self.threshold)
+            mask, t, scale = lips_opening_mask(np.ascontiguousarray(crop, dtype=np.uint8),
+                                               (box.x - x0, box.y - y0, box.w, box.h), w, self.min_height,
+                                               self.min_chroma, dark_level=dark)
+        return dataclasses.replace(self.measure(mask, t, w, scale, (x0, y0)), box=box)
+
+    def measure(self, mask: np.ndarray, t, w: int, scale: float, origin) -> Openings:
+        """Openings of a uint8 ``mask`` drawn at ``scale`` x the frame, its corner at frame ``origin``."""
         empty = np.zeros(0)
         if t is None or not mask.any():
             return Openings(empty, empty, empty, (), w, t)
         contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
         areas, widths, heights, outlines = [], [], [], []
-        min_px = self.min_area * w * w
+        min_px = self.min_area * (w * scale) ** 2
         for c in contours:
             if self.hull:
                 c = cv2.convexHull(c)
@@ -350,13 +389,16 @@ class OpeningDetector:
             # 1 px wide, and a digitised ellipse of semi-axis a measures ~2a.
             widths.append(bw)
             heights.append(bh)
-            outlines.append(c + np.array([x0, y0], np.int32))
+            if scale != 1.0:
+                c = np.rint((c + 0.5) / scale - 0.5).astype(np.int32)
+            outlines.append(c + np.array(origin, np.int32))
         if not areas:
             return Openings(empty, empty, empty, (), w, t)
         order = np.argsort(-np.asarray(areas), kind="stable")
-        a = np.asarray(areas, float)[order] / (w * w)
-        ww = np.asarray(widths, float)[order] / w
-        hh = np.asarray(heights, float)[order] / w
+        ws = w * scale
+        a = np.asarray(areas, float)[order] / (ws * ws)
+        ww = np.asarray(widths, float)[order] / ws
+        hh = np.asarray(heights, float)[order] / ws
         return Openings(a, ww, hh, tuple(outlines[i] for i in order), w, t)
 
 

@@ -80,8 +80,9 @@ def analyze_frames(frames: Iterable[np.ndarray], box, fps: float, detector: Open
     ----------
     frames : iterable of ndarray (H, W, 3) uint8
         RGB frames.
-    box : MouthBox or (x, y, w, h)
-        Mouth box; checked against the first frame.
+    box : MouthBox or (x, y, w, h), or a sequence of them
+        Mouth box, or one box per frame (an automatic box that follows the head,
+        :func:`~visemeface.analysis.mouthbox.track_mouth`).
     fps : float
     detector : OpeningDetector, optional
         Settings (default: Otsu, no hull, no teeth handling).
@@ -89,16 +90,77 @@ def analyze_frames(frames: Iterable[np.ndarray], box, fps: float, detector: Open
         Called after each frame (e.g. to write an overlay).
     """
     detector = detector or OpeningDetector()
-    box = MouthBox.of(box)
+    boxes = per_frame_boxes(box)
     found = []
     for i, frame in enumerate(frames):
-        op = detector.detect(frame, box)
+        if i >= len(boxes):
+            raise InputError(f"{len(boxes)} mouth boxes for more frames{' in ' + source if source else ''}")
+        op = detector.detect(frame, boxes[i])
         found.append(op)
         if on_frame is not None:
             on_frame(i, frame, op)
     if not found:
         raise InputError(f"no frames to analyse{' in ' + source if source else ''}")
     return profile_from_openings(found, fps, source)
+
+
+#: A clip whose decoded frames take at most this many bytes is decoded once and kept in memory
+#: when the mouth box is found automatically (otherwise it is decoded twice: find, then measure).
+BUFFER_BYTES = 512 * 2 ** 20
+
+
+def analyze_source(source, box=None, detector: OpeningDetector | None = None,
+                   on_frame: Callable[[int, np.ndarray, Openings], None] | None = None,
+                   show_progress: bool = False) -> tuple[pd.DataFrame, list | None]:
+    """Profile of a :class:`~visemeface.analysis.video.FrameSource`, and the per-frame boxes if found here.
+
+    With ``box=None`` the mouth is found in every frame
+    (:func:`~visemeface.analysis.mouthbox.track_mouth`) before it is measured;
+    the frames are decoded once when they fit in :data:`BUFFER_BYTES`.
+    """
+    from visemeface.outputs import progress
+
+    def frames(desc):
+        return progress(source.frames(), total=source.n_frames, desc=desc, show=show_progress)
+
+    if box is not None:
+        return analyze_frames(frames("analyze"), box, source.fps, detector, on_frame, str(source.path)), None
+    from visemeface.analysis.mouthbox import track_mouth
+
+    w, h = source.size
+    small = source.n_frames is not None and (source.n_frames + 2) * w * h * 3 <= BUFFER_BYTES
+    if small:
+        kept = list(frames("decode"))
+        boxes = track_mouth(kept, source=str(source.path))
+        todo = kept
+    else:
+        boxes = track_mouth(frames("find mouth"), source=str(source.path))
+        todo = frames("analyze")
+    return analyze_frames(todo, boxes, source.fps, detector, on_frame, str(source.path)), boxes
+
+
+class _Repeat:
+    """The same box for every frame."""
+
+    def __init__(self, box: MouthBox):
+        self.box = box
+
+    def __len__(self) -> int:
+        return 2 ** 62
+
+    def __getitem__(self, i: int) -> MouthBox:
+        return self.box
+
+
+def per_frame_boxes(box):
+    """An indexable of boxes, one per frame, from one box or a sequence of boxes."""
+    if isinstance(box, MouthBox):
+        return _Repeat(box)
+    seq = list(box)
+    if seq and all(isinstance(b, MouthBox) or (np.ndim(b) == 1 and len(b) == 4) for b in seq) \
+            and not all(np.isscalar(b) for b in seq):
+        return [MouthBox.of(b) for b in seq]
+    return _Repeat(MouthBox.of(seq))
 
 
 def write_profile(df: pd.DataFrame, path: str | Path, force: bool = False) -> None:
@@ -184,6 +246,70 @@ def l2_distance(a: pd.DataFrame, b: pd.DataFrame, columns: Iterable[str] = METRI
         va = np.interp(grid, ta, a[c].to_numpy(float))
         vb = np.interp(grid, tb, b[c].to_numpy(float))
         out[c] = float(np.sqrt(np.nansum((va - vb) ** 2)))
+    return out
+
+
+def _common_grid(a: pd.DataFrame, b: pd.DataFrame) -> tuple[np.ndarray, float]:
+    """Sample times of the lower-rate profile and its frame period."""
+    ref = a if _fps(a) <= _fps(b) else b
+    return ref["time"].to_numpy(float), 1.0 / _fps(ref)
+
+
+def pearson(x: np.ndarray, y: np.ndarray) -> float:
+    """Pearson correlation :math:`r = \\mathrm{cov}(x, y) / (\\sigma_x \\sigma_y)`; NaN if either is constant."""
+    x = np.asarray(x, float) - np.mean(x)
+    y = np.asarray(y, float) - np.mean(y)
+    den = np.sqrt(np.sum(x * x) * np.sum(y * y))
+    return float(np.sum(x * y) / den) if den > 1e-15 else float("nan")
+
+
+def lagged(a: pd.DataFrame, b: pd.DataFrame, column: str, lag: int) -> tuple[np.ndarray, np.ndarray]:
+    """``a(t)`` and ``b(t + lag * dt)`` on the common grid where both are defined.
+
+    ``dt`` is the frame period of the lower-rate profile; a positive ``lag``
+    means ``b`` is late (its events happen ``lag`` frames after ``a``'s).
+    """
+    grid, dt = _common_grid(a, b)
+    ta, tb = a["time"].to_numpy(float), b["time"].to_numpy(float)
+    shifted = grid + lag * dt
+    eps = 1e-9 * max(1.0, float(np.abs(grid).max(initial=0.0)))
+    ok = (grid >= ta[0] - eps) & (grid <= ta[-1] + eps) & (shifted >= tb[0] - eps) & (shifted <= tb[-1] + eps)
+    va = np.interp(grid[ok], ta, a[column].to_numpy(float))
+    vb = np.interp(shifted[ok], tb, b[column].to_numpy(float))
+    return va, vb
+
+
+def correlation(a: pd.DataFrame, b: pd.DataFrame, columns: Iterable[str] = METRICS, column: str = "height",
+                max_lag: int = 5) -> dict:
+    """Pearson correlation of two profiles and the time offset that maximises it.
+
+    Returns ``{"r": {column: r at lag 0}, "lag": k, "lag_s": k * dt, "r_lag": r of ``column`` at k}``,
+    with ``k`` the integer lag in ``[-max_lag, max_lag]`` frames (of the lower-rate profile) maximising
+    the correlation of ``column`` between ``a(t)`` and ``b(t + k dt)`` (see :func:`lagged`); at
+    least 3 common samples are needed for a lag to count.
+    """
+    if max_lag < 0:
+        raise InputError(f"max_lag must be >= 0, got {max_lag}")
+    for name, df in (("first", a), ("second", b)):
+        missing = [c for c in ("time", *columns, column) if c not in df.columns]
+        if missing:
+            raise InputError(f"{name} profile lacks column(s) {', '.join(missing)}")
+    r0 = {c: pearson(*lagged(a, b, c, 0)) for c in columns}
+    best, best_r = 0, -np.inf
+    for k in range(-max_lag, max_lag + 1):
+        va, vb = lagged(a, b, column, k)
+        r = pearson(va, vb) if va.size >= 3 else float("nan")
+        if np.isfinite(r) and (r > best_r + 1e-12 or (abs(r - best_r) <= 1e-12 and abs(k) < abs(best))):
+            best, best_r = k, r
+    _, dt = _common_grid(a, b)
+    return {"r": r0, "lag": best, "lag_s": best * dt, "r_lag": best_r if np.isfinite(best_r) else float("nan")}
+
+
+def shifted_profile(df: pd.DataFrame, seconds: float) -> pd.DataFrame:
+    """Copy of a profile with its times moved by ``-seconds`` (undo a lag for plotting)."""
+    out = df.copy()
+    out["time"] = out["time"] - seconds
+    out.attrs.update(df.attrs)
     return out
 
 

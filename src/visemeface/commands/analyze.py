@@ -9,30 +9,43 @@ def register(subparsers) -> None:
     p = subparsers.add_parser(
         "analyze",
         help="measure mouth openings frame by frame (count, area, width, height) -> CSV and plots",
-        description="Measure the mouth openings of every frame of a video (MP4/AVI/...) or a folder of "
-        "PNG/JPG frames, the way seed 001 evaluates sticky lips: greyscale, median blur, dark threshold, "
-        "top-level contours. Per frame: number of openings and the largest one's area, width and height, "
+        description="Measure the mouth openings of every frame of a video (MP4/AVI/MPG/...) or a folder of "
+        "PNG/JPG frames. Default method 'lips': the lips are segmented by colour (redder than skin, Lab a*) "
+        "and the opening is the region enclosed between the upper and the lower lip, teeth and tongue "
+        "included (real mouths are rarely a dark hole); small, compressed mouths (40 px in MPEG-1) are "
+        "resampled first. Method 'seed' is seed 001's: greyscale, median blur, dark threshold, top-level "
+        "contours. Per frame: number of openings and the largest one's area, width and height, "
         "normalised by the mouth width (the box width: its left/right edges on the mouth corners; "
         "area by the width squared), plus frame differences of area and width. The mouth box comes "
         "from --box, --box-json, or a sidecar <video>.json "
         '({"mouth_box": [x, y, w, h], "fps": 30, "size": [W, H]}; `visemeface face --camera-json` writes '
-        "one for the rendered face). A margin around the box (--pad) is analysed too, so a box drawn on "
-        "the rest lips does not cut off a dropped jaw.",
-        epilog="example: visemeface analyze take1.mp4 --box 310,420,400,180 -o take1.csv --plot take1.png "
-        "--overlay take1_overlay",
+        "one for the rendered face); without any, it is found automatically in every frame (face by skin "
+        "colour, lips by redness; the mouth width is the median over the clip). A margin around the box "
+        "(--pad) is analysed too, so a box drawn on the rest lips does not cut off a dropped jaw.",
+        epilog="examples: visemeface analyze take1.mp4 --box 310,420,400,180 -o take1.csv --plot take1.png "
+        "--overlay take1_overlay;  visemeface analyze swwp2s.mpg -o real.csv  (automatic mouth box)",
     )
     p.add_argument("input", metavar="VIDEO_OR_DIR", help="video file or folder of .png/.jpg frames")
     p.add_argument("-o", "--output", required=True, metavar="CSV", help="profile CSV to write")
     p.add_argument("--box", metavar="X,Y,W,H",
-                   help="mouth box in pixels (origin top-left); X and X+W on the mouth corners at rest")
+                   help="mouth box in pixels (origin top-left); X and X+W on the mouth corners at rest "
+                   "(default: the sidecar's, else found automatically in every frame)")
     p.add_argument("--box-json", metavar="FILE",
                    help="sidecar JSON with \"mouth_box\" (default: <input>.json or <input stem>.json if present)")
     p.add_argument("--fps", type=float, help="frame rate (default: the video's, the sidecar's, or 30 for folders)")
+    p.add_argument("--method", choices=("lips", "seed"), default="lips",
+                   help="'lips' (default): the region enclosed between the lips, teeth and tongue included; "
+                   "'seed': seed 001's dark threshold")
     p.add_argument("--threshold", default="otsu", metavar="N|otsu",
-                   help="grey level 0-255 at or below which a pixel is mouth opening, or 'otsu' (default)")
+                   help="seed: grey level 0-255 at or below which a pixel is mouth opening, or 'otsu' (default); "
+                   "lips: a grey level at or below which a pixel is never lip (default: relative to the lips)")
     p.add_argument("--hull", action="store_true", help="use each opening's convex hull (bright reflections)")
     p.add_argument("--teeth", action="store_true",
-                   help="count bright unsaturated pixels (teeth) touching the opening as opening")
+                   help="seed method: count bright unsaturated pixels (teeth) touching the opening as opening "
+                   "(the lips method always counts teeth between the lips)")
+    p.add_argument("--min-height", type=float, default=0.05, metavar="F",
+                   help="lips method: an opening nowhere F * mouth_width thick is the seam of closed lips "
+                   "(default 0.05)")
     p.add_argument("--min-area", type=float, default=5e-4, metavar="F",
                    help="drop openings smaller than F * mouth_width^2 pixels (default 5e-4)")
     p.add_argument("--pad", default="0.1,0.1,0.1,0.4", metavar="F|L,T,R,B",
@@ -73,13 +86,14 @@ def run(args) -> int:
     import cv2
 
     from visemeface.analysis.openings import OpeningDetector, draw_openings
-    from visemeface.analysis.profiles import analyze_frames, plot_profiles, write_profile
+    from visemeface.analysis.profiles import analyze_source, plot_profiles, write_profile
     from visemeface.analysis.video import open_frames, parse_box, read_sidecar, sidecar_path
     from visemeface.errors import InputError
     from visemeface.outputs import atomic_dir, check_new, check_suffix, progress
 
     detector = OpeningDetector(threshold=_threshold(args.threshold), hull=args.hull, teeth=args.teeth,
-                               min_area=args.min_area, pad=_pad(args.pad))
+                               min_area=args.min_area, pad=_pad(args.pad), method=args.method,
+                               min_height=args.min_height)
     if not Path(args.input).exists():
         raise InputError("no such file or folder", args.input)
     # --box wins; a sidecar found next to the input is only read when no box is given
@@ -90,8 +104,7 @@ def run(args) -> int:
     elif sidecar is not None:
         box = sidecar.mouth_box
     else:
-        raise InputError(f"no mouth box for {args.input}: give --box X,Y,W,H or --box-json FILE "
-                         "(or put a sidecar <input>.json next to it)")
+        box = None              # found automatically, frame by frame
     check_suffix(args.output, ".csv")
     if args.plot:
         check_suffix(args.plot, ".png", ".pdf", ".svg")
@@ -109,28 +122,27 @@ def run(args) -> int:
         if sidecar is not None and args.box is None and sidecar.size and tuple(sidecar.size) != source.size:
             raise InputError(f"sidecar is for {sidecar.size[0]}x{sidecar.size[1]} frames, the video is "
                              f"{source.size[0]}x{source.size[1]}", side_file)
-        box.check_inside(*source.size)
+        if box is not None:
+            box.check_inside(*source.size)
     except InputError:
         source.close()
         raise
-
-    # The overlay shows the mouth box with a margin, like seed 001 Figs. 7-15.
-    x0, y0, x1, y1 = box.region([max(p, 0.15) for p in detector.pad], *source.size)
-
     with contextlib.ExitStack() as stack:
         on_frame = None
         if args.overlay:
             from visemeface.render.export import frame_name
 
             overlay_dir = stack.enter_context(atomic_dir(args.overlay, args.force))
+            margin = [max(p, 0.15) for p in detector.pad]
 
             def on_frame(i, frame, openings):
-                img = draw_openings(frame, openings, box, f"frame {i}")[y0:y1, x0:x1]
+                # The overlay shows the mouth box with a margin, like seed 001 Figs. 7-15.
+                x0, y0, x1, y1 = openings.box.region(margin, *source.size)
+                img = draw_openings(frame, openings, openings.box, f"frame {i}")[y0:y1, x0:x1]
                 if not cv2.imwrite(str(overlay_dir / frame_name(i)), cv2.cvtColor(img, cv2.COLOR_RGB2BGR)):
                     raise InputError("cannot write overlay frame", overlay_dir)
 
-        frames = progress(source.frames(), total=source.n_frames, desc="analyze")
-        df = analyze_frames(frames, box, source.fps, detector, on_frame, source=str(args.input))
+        df, boxes = analyze_source(source, box, detector, on_frame, show_progress=True)
     write_profile(df, args.output, args.force)
     if args.plot:
         plot_profiles({Path(args.input).name: df}, args.plot, title=f"mouth openings: {Path(args.input).name}",
@@ -139,7 +151,8 @@ def run(args) -> int:
     n = len(df)
     multi = int((df["count"] >= 2).sum())
     jump = df["d_width"].abs()
-    msg = (f"{n} frames at {source.fps:g} fps, mouth width {box.w} px: openings max {int(df['count'].max())}, "
+    width = f"mouth width {box.w} px" if boxes is None else f"automatic mouth box, width {boxes[0].w} px"
+    msg = (f"{n} frames at {source.fps:g} fps, {width}, method {args.method}: openings max {int(df['count'].max())}, "
            f"{multi} frame(s) with 2 or more; max width {df['width'].max():.3f} w, "
            f"max area {df['area'].max():.4f} w^2")
     if n > 1 and jump.max() > 0:

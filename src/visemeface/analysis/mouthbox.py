@@ -1,0 +1,221 @@
+"""Automatic mouth box for real video without a sidecar: find the face by skin colour, the lips in it.
+
+No face-landmark model ships inside a pip wheel that runs offline with this
+project's dependencies (see ``docs/analysis.md``), so the box comes from
+colour, the same cue the lip segmentation uses:
+
+1. *Face*: skin pixels in YCrCb, :math:`135 \\le C_r \\le 185`,
+   :math:`70 \\le C_b \\le 135`, :math:`Y \\ge 40` (the classic skin cluster of
+   Chai & Ngan, widened for a warm camera); the largest 8-connected skin region
+   of the frame (subsampled to at most 200 px wide), holes (eyes, mouth) filled. It must cover at
+   least ``min_face`` of the frame, or there is no face.
+2. *Lips*: inside the lower half of the face's bounding box (rows 0.5-0.95 of
+   its height, columns 0.2-0.8 of its width) the Lab :math:`a^*` channel is
+   split by Otsu's method, and its redder class split again (lips vs flushed
+   skin); of the large red regions near the face's vertical axis the lowest is
+   the mouth (the nose and the cheeks are above it), joined with a lip region
+   straight above or below it (lips parted by an opening). Its left and right
+   extremes are the corners.
+3. *Tracking*: the face is found again every ``face_every`` frames (it moves
+   little in 0.2 s) and at once when the lips are lost; the lips are searched
+   in every frame (no drift), and the box centre
+   is median-filtered over ``smooth`` frames; the box width -- the *natural
+   mouth width* that normalises every metric -- is the median of the per-frame
+   widths over the whole clip, so a wide-open or rounded frame does not
+   change the scale. Every ``refine_every``-th frame the lips are segmented
+   around the red region as the opening detector does
+   (:func:`~visemeface.analysis.lips.lip_mask`: skin vs lips inside the box,
+   not the whole face), which sets the width and re-centres the box: the
+   face-wide red region can take in flushed skin. Their colour fades out just
+   before the corners, so ``w`` is :data:`WIDEN` times their width. The box
+   reaches from ``0.15 w`` above the red region (the paler upper vermilion) to
+   its bottom; :class:`~visemeface.analysis.openings.OpeningDetector` pads it.
+
+A frame where no lips are found takes the neighbouring frames' box; a clip
+where no frame shows a face is an :class:`~visemeface.errors.InputError`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+import cv2
+import numpy as np
+
+from visemeface.analysis.openings import MouthBox
+from visemeface.errors import InputError
+
+
+#: Box width / width of the segmented lips. Tuned on the three GRID clips of ../shared/realdata:
+#: the lips' colour fades out 1-3 px before the hand-read corners of a 35-40 px mouth.
+WIDEN = 1.12
+
+
+def face_mask(rgb: np.ndarray, min_face: float = 0.02) -> tuple[np.ndarray, tuple] | None:
+    """Skin mask of the largest skin region (holes filled) and its box ``(x, y, w, h)``, or None."""
+    ycc = cv2.cvtColor(rgb, cv2.COLOR_RGB2YCrCb)
+    skin = cv2.inRange(ycc, (40, 135, 70), (255, 185, 135))
+    skin = cv2.morphologyEx(skin, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(skin, connectivity=8)
+    if n < 2:
+        return None
+    i = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    if stats[i, cv2.CC_STAT_AREA] < min_face * skin.size:
+        return None
+    x, y, w, h = (int(v) for v in stats[i, :4])
+    region = (labels[y:y + h, x:x + w] == i).astype(np.uint8)
+    contours, _ = cv2.findContours(region, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    filled = np.zeros_like(region)
+    cv2.drawContours(filled, contours, -1, 1, cv2.FILLED)
+    return filled.view(bool), (x, y, w, h)
+
+
+def _subsample(img: np.ndarray, k: int) -> np.ndarray:
+    """Every ``k``-th pixel of every ``k``-th row (nearest neighbour), contiguous."""
+    if k <= 1:
+        return np.ascontiguousarray(img)
+    h, w = img.shape[:2]
+    return cv2.resize(img, ((w + k - 1) // k, (h + k - 1) // k), interpolation=cv2.INTER_NEAREST)
+
+
+def find_face(rgb: np.ndarray, min_face: float = 0.02):
+    """The face for :func:`find_lips`: its skin mask and box on the lips' grid, or None."""
+    f = max(1, int(np.ceil(rgb.shape[1] / 400)))
+    k = max(1, int(np.ceil(rgb.shape[1] / 200 / f)))          # the face's grid is k times coarser
+    found = face_mask(_subsample(rgb, f * k), min_face)
+    if found is None:
+        return None
+    coarse, (fx, fy, fw, fh) = found
+    hs, ws = (rgb.shape[0] + f - 1) // f, (rgb.shape[1] + f - 1) // f
+    fx, fy, fw, fh = fx * k, fy * k, min(fw * k, ws - fx * k), min(fh * k, hs - fy * k)
+    face = cv2.resize(coarse.view(np.uint8), (fw, fh), interpolation=cv2.INTER_NEAREST).view(bool) \
+        if k > 1 else coarse
+    return face, (fx, fy, fw, fh)
+
+
+def find_lips(rgb: np.ndarray, min_face: float = 0.02, face=None) -> tuple[float, float, float, float] | None:
+    """Lip extent ``(x_left, x_right, y_top, y_bottom)`` in frame pixels, or None (no face or no lips).
+
+    The face (:func:`find_face`, or ``face`` found in a nearby frame) is
+    found on a frame subsampled to at most 200 px wide, the lips on one at most
+    400 px wide; see the module notes.
+    """
+    f = max(1, int(np.ceil(rgb.shape[1] / 400)))
+    small = _subsample(rgb, f)
+    found = face if face is not None else find_face(rgb, min_face)
+    if found is None:
+        return None
+    face, (fx, fy, fw, fh) = found
+    y0, y1 = int(0.5 * fh), int(0.95 * fh)
+    x0, x1 = int(0.2 * fw), int(0.8 * fw)
+    if y1 - y0 < 4 or x1 - x0 < 4:
+        return None
+    sub = np.ascontiguousarray(small[fy + y0:fy + y1, fx + x0:fx + x1])
+    inside = face[y0:y1, x0:x1]
+    a = cv2.GaussianBlur(cv2.cvtColor(sub, cv2.COLOR_RGB2LAB)[..., 1], (3, 3), 0)
+    vals = a[inside]
+    if vals.size < 16:
+        return None
+    t, _ = cv2.threshold(vals.reshape(1, -1), 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    upper = vals[vals > t]          # the redder half of the face, split again: lips vs flushed skin
+    if upper.size >= 16:
+        t, _ = cv2.threshold(upper.reshape(1, -1), 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    red = ((a > t) & inside).view(np.uint8)
+    red = cv2.morphologyEx(red, cv2.MORPH_OPEN, np.ones((2, 2), np.uint8))
+    n, labels, stats, cents = cv2.connectedComponentsWithStats(red, connectivity=8)
+    if n < 2:
+        return None
+    axis = fw / 2 - x0
+    area = stats[1:, cv2.CC_STAT_AREA].astype(float)
+    near = np.abs(cents[1:, 0] - axis) <= 0.15 * fw
+    big = near & (area >= 0.2 * area[near].max()) if near.any() else area >= 0.2 * area.max()
+    # The mouth is the lowest of the large red regions near the face's axis (the nose is above it).
+    i = 1 + int(np.argmax(np.where(big, cents[1:, 1], -np.inf)))
+    x, y, w, h = (int(v) for v in stats[i, :4])
+    # Lips parted by the opening are two regions: join those straight above or below this one.
+    for j in range(1, n):
+        xj, yj, wj, hj = (int(v) for v in stats[j, :4])
+        if j != i and area[j - 1] >= 0.2 * area[i - 1] and abs(cents[j, 0] - cents[i, 0]) <= 0.25 * w \
+                and 0.5 * w <= wj <= 1.5 * w and min(abs(yj + hj - y), abs(y + h - yj)) <= 0.25 * w:
+            x1_, y1_ = max(x + w, xj + wj), max(y + h, yj + hj)
+            x, y = min(x, xj), min(y, yj)
+            w, h = x1_ - x, y1_ - y
+    if w < 3:
+        return None
+    ox, oy = fx + x0, fy + y0
+    return ((ox + x) * f, (ox + x + w) * f, (oy + y) * f, (oy + y + h) * f)
+
+
+def _median_filter(v: np.ndarray, k: int) -> np.ndarray:
+    if k <= 1 or v.size < 3:
+        return v
+    r = k // 2
+    padded = np.pad(v, r, mode="edge")
+    return np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * r + 1), axis=1)
+
+
+def lip_extent(frame: np.ndarray, red) -> tuple[float, float, float] | None:
+    """Left and right end of the lips segmented by :func:`~visemeface.analysis.lips.lip_mask`
+    around a red region ``(x_left, x_right, y_top, y_bottom)``, and the region's centre x."""
+    from visemeface.analysis.lips import lip_mask, work_scale
+
+    x_l, x_r, y_t, y_b = red
+    w = max(4.0, x_r - x_l)
+    box = MouthBox.of((x_l, y_t - 0.15 * w, w, y_b - y_t + 0.15 * w))
+    x0, y0 = max(0, int(box.x - 0.25 * w)), max(0, int(box.y - 0.1 * w))
+    x1, y1 = min(frame.shape[1], int(box.x + 1.25 * w)), min(frame.shape[0], int(box.y + box.h + 0.4 * w))
+    s = work_scale(box.w)
+    crop = cv2.resize(np.ascontiguousarray(frame[y0:y1, x0:x1]), None, fx=s, fy=s, interpolation=cv2.INTER_LINEAR)
+    lips, t = lip_mask(crop, tuple(int(round(v * s)) for v in (box.x - x0, box.y - y0, box.w, box.h)), s)
+    cols = np.flatnonzero(lips.any(axis=0))
+    if t is None or cols.size < 2:
+        return None
+    return (cols[0] + 0.5) / s - 0.5 + x0, (cols[-1] + 0.5) / s - 0.5 + x0, (x_l + x_r) / 2
+
+
+def track_mouth(frames: Iterable[np.ndarray], smooth: int = 5, min_face: float = 0.02,
+                source: str = "", face_every: int = 5, refine_every: int = 5) -> list[MouthBox]:
+    """One mouth box per frame (see the module notes); raises InputError if no frame shows a face."""
+    found, size, face, age, fine = [], None, None, 0, []
+    for frame in frames:
+        size = frame.shape[1], frame.shape[0]
+        if face is None or age >= face_every:
+            face, age = find_face(frame, min_face), 0
+        lips = find_lips(frame, min_face, face) if face is not None else None
+        if lips is None and age > 0:            # lost: look for the face again
+            face, age = find_face(frame, min_face), 0
+            lips = find_lips(frame, min_face, face) if face is not None else None
+        age += 1
+        found.append(lips)
+        if lips is not None and len(found) % refine_every == 1:
+            fine.append(lip_extent(frame, lips))
+    where = f" in {source}" if source else ""
+    if not found:
+        raise InputError(f"no frames{where}")
+    ok = np.array([f is not None for f in found])
+    if not ok.any():
+        raise InputError(f"no face found{where}: give the mouth box with --box X,Y,W,H or --box-json FILE")
+    ext = np.array([f if f is not None else (np.nan,) * 4 for f in found], float)
+    idx = np.arange(len(found))
+    for j in range(4):           # frames without lips: interpolate from their neighbours
+        ext[:, j] = np.interp(idx, idx[ok], ext[ok, j])
+    cx = _median_filter((ext[:, 0] + ext[:, 1]) / 2, smooth)
+    fine = np.array([f for f in fine if f is not None], float).reshape(-1, 3)
+    if len(fine):
+        # The lips as the opening detector segments them (the box's own skin/lip split) set the
+        # width and shift the centre: the face-wide red region can take in flushed skin.
+        width = WIDEN * float(np.median(fine[:, 1] - fine[:, 0]))
+        cx = cx + float(np.median((fine[:, 0] + fine[:, 1]) / 2 - fine[:, 2]))
+    else:
+        width = WIDEN * float(np.median(ext[:, 1] - ext[:, 0]))
+    top = _median_filter(ext[:, 2], smooth)
+    bottom = _median_filter(ext[:, 3], smooth)
+    w = max(4, int(round(width)))
+    boxes = []
+    for x, y0, y1 in zip(cx, top, bottom):
+        # From a little above the red region (the pale upper vermilion) to its bottom.
+        h = max(4, int(round(y1 - y0 + 0.15 * w)))
+        bx = int(np.clip(round(x - w / 2), 0, size[0] - w))
+        by = int(np.clip(round(y0 - 0.15 * w), 0, size[1] - h))
+        boxes.append(MouthBox(bx, by, w, h))
+    return boxes

@@ -1,0 +1,106 @@
+"""The opening detector and the automatic mouth box on real GRID video, against hand labels.
+
+``data/realdata_labels.csv`` holds labels read by eye from enlarged frames (every 5th frame of
+the three clips in ../shared/realdata; see its header). The clips are the GRID corpus's (Cooke,
+Barker, Cunningham & Shao, JASA 120:2421, 2006).
+"""
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pandas as pd
+import pytest
+
+from visemeface.analysis.mouthbox import track_mouth
+from visemeface.analysis.openings import OpeningDetector
+from visemeface.analysis.video import open_frames
+
+LABELS = Path(__file__).parent / "data" / "realdata_labels.csv"
+CLIPS = ("swwp2s", "bbaf2n", "lbax4n")
+
+pytestmark = [pytest.mark.realdata, pytest.mark.slow]
+
+
+def labels() -> pd.DataFrame:
+    return pd.read_csv(LABELS, comment="#")
+
+
+def measure(realdata: Path, clip: str, detector: OpeningDetector | None = None):
+    """Frames, tracked boxes and detections of one clip."""
+    frames = list(open_frames(realdata / f"{clip}.mpg").frames())
+    boxes = track_mouth(frames, source=clip)
+    detector = detector or OpeningDetector()
+    return frames, boxes, [detector.detect(f, b) for f, b in zip(frames, boxes)]
+
+
+def agreement(realdata: Path, detector: OpeningDetector | None = None) -> pd.DataFrame:
+    """Labels joined with the detector's open/closed and height (px) per labelled frame."""
+    lab = labels()
+    rows = []
+    for clip in CLIPS:
+        _, boxes, found = measure(realdata, clip, detector)
+        for r in lab[lab["clip"] == clip].itertuples():
+            op = found[r.frame]
+            rows.append((clip, r.frame, r.open, r.height_px, int(op.count > 0), op.largest_height * op.mouth_width))
+    return pd.DataFrame(rows, columns=["clip", "frame", "open", "height_px", "found", "found_px"])
+
+
+@pytest.fixture(scope="module")
+def table(realdata):
+    return agreement(realdata)
+
+
+def test_open_closed_agreement_with_hand_labels(table):
+    agree = (table["open"] == table["found"]).mean()
+    assert agree >= 0.95, table[table["open"] != table["found"]].to_string()
+
+
+def test_opening_height_within_2px_of_hand_labels(table):
+    both = table[(table["open"] == 1) & (table["found"] == 1)]
+    err = (both["found_px"] - both["height_px"]).abs()
+    assert (err <= 2).all(), both[err > 2].to_string()
+
+
+def test_no_detection_on_the_beard_or_nostrils(realdata):
+    """Every opening found lies between the mouth corners and below the nose: inside the padded box."""
+    for clip in CLIPS:
+        _, boxes, found = measure(realdata, clip)
+        for b, op in zip(boxes, found):
+            for c in op.contours:
+                x, y, w, h = cv2.boundingRect(c)
+                assert b.x - 0.1 * b.w <= x and x + w <= b.x + 1.1 * b.w, (clip, b, (x, y, w, h))
+                assert y >= b.y - 0.1 * b.w, (clip, b, (x, y, w, h))
+
+
+#: The mouth in the 100x50 crops of bbaf2n_mouth/ (corners at x = 31 and 70), read by eye.
+CROP_BOX = (31, 18, 39, 17)
+
+
+def test_mouth_crops_count_one_opening_when_open(realdata):
+    """bbaf2n_mouth/: the same utterance as crops; 1 opening on open frames, 0 on closed ones."""
+    from visemeface.analysis.profiles import analyze_frames
+
+    src = open_frames(realdata / "bbaf2n_mouth", fps=25)
+    df = analyze_frames(src.frames(), CROP_BOX, 25)
+    lab = labels()
+    lab = lab[lab["clip"] == "bbaf2n"]
+    counts = df["count"].to_numpy()[lab["frame"].to_numpy()]
+    np.testing.assert_array_equal(counts, lab["open"].to_numpy())
+
+
+def test_automatic_box_edges_near_the_mouth_corners(realdata):
+    """The automatic box's edges lie within 5 px (about 0.13 w) of the hand-read corners.
+
+    Not yet the issue's "covers both corners on every frame": on bbaf2n the right corner (where the
+    lip line fades into a crease) lies up to 5 px beyond the box; the opening detector analyses the
+    box plus 0.1 w on each side.
+    """
+    corners = pd.read_csv(LABELS.with_name("realdata_corners.csv"), comment="#")
+    off = []
+    for clip in CLIPS:
+        boxes = track_mouth(list(open_frames(realdata / f"{clip}.mpg").frames()), source=clip)
+        for r in corners[corners["clip"] == clip].itertuples():
+            b = boxes[r.frame]
+            off += [b.x - r.left_x, b.x + b.w - 1 - r.right_x]
+    assert np.abs(off).max() <= 5, off
