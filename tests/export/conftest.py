@@ -1,10 +1,11 @@
 """One speak run writing every export of this folder's tests (made once per session)."""
 
-import numpy as np
+import shutil
+
 import pytest
-import soundfile as sf
 
 from visemeface.cli import main
+from visemeface.resources import transcripts_path
 
 TEXT = "one five zero zero six"
 OUTPUTS = {"--gltf": "a.glb", "--arkit": "a.json", "--livelink": "ll.csv", "--vrm": "v.csv", "--oculus": "o.csv",
@@ -15,8 +16,7 @@ OUTPUTS = {"--gltf": "a.glb", "--arkit": "a.json", "--livelink": "ll.csv", "--vr
 def exported(tmp_path_factory):
     root = tmp_path_factory.mktemp("exports")
     (root / "t.txt").write_text(TEXT + "\n")
-    t = np.arange(int(2.3 * 16000)) / 16000
-    sf.write(root / "a.wav", 0.1 * np.sin(2 * np.pi * 220 * t), 16000)
+    shutil.copy(transcripts_path("set_white_with_p_two_soon.wav"), root / "a.wav")   # real speech: the text is timed to it
     args = ["speak", str(root / "t.txt"), "--no-video", "-q", "--audio", str(root / "a.wav")]
     for option, name in OUTPUTS.items():
         args += [option, str(root / name)]

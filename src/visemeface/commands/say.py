@@ -54,13 +54,12 @@ def run(args) -> int:
         raise InputError("--rate and --audio both time the text; give one")
     sinks, render, physics = check_early(args, Path.cwd() / "say.mp4")
     speak_aloud = args.audio is None and not args.silent
-    if speak_aloud and not tts.available():
-        speak_aloud = False
-        if not args.quiet:
-            print(f"visemeface: note: {tts.HINT}", file=sys.stderr)
-    if not speak_aloud:
+    if not speak_aloud or not tts.available():
         utterance = text_to_utterance(args.text, rate_wpm=args.rate, audio=args.audio)
-        return animate_utterance(utterance, args, sinks, render, physics)
+        status = animate_utterance(utterance, args, sinks, render, physics)
+        if speak_aloud and not args.quiet:      # after the run: a bad input's error stays the only line
+            print(f"visemeface: note: {tts.HINT}", file=sys.stderr)
+        return status
     from visemeface.speech.align import utterance_from_audio
 
     text_to_utterance(args.text, rate_wpm=args.rate)        # the text's own errors first (tags, rate)
