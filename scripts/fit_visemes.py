@@ -43,6 +43,16 @@ DECIMALS = 4
 EXCLUDED = ("zygomatic_major_left", "zygomatic_major_right")
 
 
+def tongue_targets() -> dict:
+    """Tongue targets per symbol from ``data/visemes/tongue.csv`` (phonetic, not fitted: the lip
+    gauge cannot see the tongue), copied into the viseme table's tongue columns."""
+    from visemeface.resources import data_path
+
+    with open(data_path("visemes", "tongue.csv"), newline="") as f:
+        return {r["symbol"]: {k: float(v) for k, v in r.items() if k.startswith("tongue_")}
+                for r in csv.DictReader(f)}
+
+
 def fit_table(rig=None, targets=None):
     """Fit every posture; return (rows, report) with rows as dicts for the CSV."""
     from visemeface.muscles.fitting import fit_activations
@@ -55,6 +65,7 @@ def fit_table(rig=None, targets=None):
     targets = load_targets() if targets is None else targets
     fitted = [f for f in SPEECH_FUNCTIONS if f not in EXCLUDED]
     rows, report = [], []
+    tongue = tongue_targets()
     for sym, t in progress(list(targets.iterrows()), desc="fitting", unit="viseme"):
         goal = {k: float(t[k]) for k in TARGET_DIMENSIONS}
         if all(v == 0 for v in goal.values()):
@@ -65,7 +76,8 @@ def fit_table(rig=None, targets=None):
             acts = {f: round(float(a[f]), DECIMALS) for f in SPEECH_FUNCTIONS}
             achieved = a.attrs["achieved"]
         err = {k: achieved[k] - goal[k] for k in TARGET_DIMENSIONS}
-        rows.append({"index": int(t["index"]), "symbol": sym, "class": t["class"], **acts, "notes": t["notes"]})
+        rows.append({"index": int(t["index"]), "symbol": sym, "class": t["class"], **acts, **tongue[sym],
+                     "notes": t["notes"]})
         report.append({"symbol": sym, "target": {k: round(v, 4) for k, v in goal.items()},
                        "achieved": {k: round(achieved[k], 4) for k in TARGET_DIMENSIONS},
                        "max_abs_error": round(max(abs(v) for v in err.values()), 4),

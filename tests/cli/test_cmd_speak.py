@@ -183,12 +183,13 @@ def test_speak_end_to_end_all_exports(short, capsys):
     assert len(profile) == N_SHORT
     assert profile["count"][6] == 0 and profile["count"][10] >= 1 and profile["area"][10] > 0
 
-    # glTF: 25 muscle targets + jaw samples; plays the rig's poses; lasts the utterance
+    # glTF: 25 muscle and 5 tongue targets + jaw samples; plays the rig's poses; lasts the utterance
     gl, arr = _glb_arrays(short / "s.glb")
     prim = gl.meshes[0].primitives[0]
     tnames = gl.meshes[0].extras["targetNames"]
-    assert tnames[:25] == list(rig.names[:25])
-    assert all(n.startswith("jaw@") for n in tnames[25:]) and len(tnames) >= 25 + JAW_SAMPLES
+    m = len(rig.muscles)
+    assert tnames[:m] == list(rig.names[:m]) and "tongue_tip_raise" in tnames
+    assert all(n.startswith("jaw@") for n in tnames[m:]) and len(tnames) >= m + JAW_SAMPLES
     assert len(prim.targets) == len(tnames)
     sampler = gl.animations[0].samplers[0]
     times = arr(sampler.input)

@@ -24,11 +24,15 @@ def rig():
     return default_rig()
 
 
+TONGUE = ("tongue_tip_raise", "tongue_protrusion", "tongue_dorsum_raise", "tongue_groove", "tongue_retraction")
+
+
 def test_names_and_ranges(rig):
-    expect = tuple(f"{p}_{s}" for p in PAIRS for s in ("left", "right")) + ("orbicularis_oris", "jaw")
-    assert rig.names == expect and len(rig.muscles) == 25
-    assert rig.ranges.shape == (26, 2) and np.all(rig.ranges[:, 0] < rig.ranges[:, 1])
-    assert rig.bases.shape == (25, rig.face.n_vertices, 3)
+    expect = (tuple(f"{p}_{s}" for p in PAIRS for s in ("left", "right")) + ("orbicularis_oris",) + TONGUE
+              + ("jaw",))
+    assert rig.names == expect and len(rig.muscles) == 30
+    assert rig.ranges.shape == (31, 2) and np.all(rig.ranges[:, 0] < rig.ranges[:, 1])
+    assert rig.bases.shape == (30, rig.face.n_vertices, 3)
     # Every muscle moves something, by millimetres, not metres.
     mags = np.linalg.norm(rig.bases, axis=2).max(axis=1)
     assert np.all(mags > 0.002) and np.all(mags < 0.02)
@@ -299,8 +303,8 @@ def test_mesh_without_eyes_region_still_rigs():
     ref = default_rig()
     regions = {k: v for k, v in ref.face.regions.items() if k != "eyes"}
     rig = MuscleRig.from_file(dataclasses.replace(ref.face, regions=regions))
-    assert rig.muscles[0].exclude == ()
-    text = _default_text().replace('exclude = ["eyes"]     # regions', 'exclude = ["eyse"]     # regions')
+    assert "eyes" not in rig.muscles[0].exclude and "tongue" in rig.muscles[0].exclude
+    text = _default_text().replace('exclude = ["eyes", "upper_teeth"', 'exclude = ["eyse", "upper_teeth"')
     with pytest.raises(InputError, match="unknown region 'eyse'.*did you mean: eyes"):
         import tempfile
         from pathlib import Path
@@ -345,3 +349,40 @@ def test_the_shared_default_rig_cannot_be_changed_by_one_caller():
     with pytest.raises(ValueError):
         shared.face.vertices[0, 0] = 1.0
     assert default_rig() is shared
+
+
+def test_teeth_are_bone_and_the_tongue_has_its_own_functions(rig):
+    face = rig.face
+    r = face.regions
+    up = np.concatenate([r["upper_teeth"], r["upper_gum"]])
+    lower = np.concatenate([r["lower_teeth"], r["lower_gum"]])
+    tongue = r["tongue"]
+    for i, m in enumerate(rig.muscles):
+        b = np.linalg.norm(rig.bases[i], axis=1)
+        assert b[up].max() == 0 and b[lower].max() == 0, m.name        # no function bends a tooth
+        if m.name in TONGUE:
+            assert b[tongue].max() > 0.002                            # millimetres of tongue
+            assert np.delete(b, tongue).max() == 0, m.name            # and nothing else
+        else:
+            assert b[tongue].max() == 0, m.name
+    # the jaw turns the lower teeth rigidly (distances kept) and leaves the upper teeth
+    open_ = rig.pose({"jaw": 1.0})
+    rest = face.vertices
+    assert np.abs(open_[up] - rest[up]).max() == 0
+    d0 = np.linalg.norm(rest[lower][:, None] - rest[lower][None], axis=2)
+    d1 = np.linalg.norm(open_[lower][:, None] - open_[lower][None], axis=2)
+    assert np.abs(d1 - d0).max() < 1e-6
+    drop = rest[face.landmarks["lower_incisor_edge"], 1] - open_[face.landmarks["lower_incisor_edge"], 1]
+    lip_drop = rest[face.landmarks["lower_lip_mid"], 1] - open_[face.landmarks["lower_lip_mid"], 1]
+    assert 0.012 < drop and abs(drop - lip_drop) < 0.006             # the teeth go down with the lip
+
+
+def test_tongue_functions_skip_a_face_without_a_tongue(tmp_path):
+    face = default_face(resolution=1500)
+    keep = {k: v for k, v in face.regions.items() if k != "tongue"}
+    from visemeface.face.mesh import FaceMesh
+    bare = FaceMesh(face.vertices, face.quads, face.tris, keep,
+                    {k: v for k, v in face.landmarks.items() if not k.startswith("tongue")}, face.colors)
+    rig = MuscleRig.from_file(bare)
+    i = rig.names.index("tongue_tip_raise")
+    assert np.abs(rig.bases[i]).max() == 0

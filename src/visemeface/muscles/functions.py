@@ -22,6 +22,7 @@ __all__ = [
     "lip_trim_weights",
     "jaw_centre_weight",
     "jaw_rotation_displacement",
+    "local_displacement",
 ]
 
 
@@ -292,3 +293,24 @@ def jaw_rotation_displacement(points: np.ndarray, joint_left, joint_right, angle
     cross = np.cross(kax, r)
     theta = angle * np.asarray(weights, dtype=float)
     return (np.cos(theta) - 1.0)[:, None] * perp + np.sin(theta)[:, None] * cross
+
+
+def local_displacement(points: np.ndarray, centre, radii, direction, mask: np.ndarray,
+                       axes: np.ndarray | None = None) -> np.ndarray:
+    r"""A smooth local push (N, 3) at activation 1: the tongue's and the lids' controls.
+
+    Each vertex in ``mask`` moves along ``direction`` (a vector, m) scaled by a
+    Gaussian of its ellipsoidal distance to ``centre``,
+
+    .. math:: \Delta\mathbf p = \mathbf d\,\exp\Big(-\sum_k \big((p_k - c_k)/r_k\big)^2\Big),
+
+    with per-axis radii ``radii`` (m) along the rows of ``axes`` (a rig's mouth
+    frame; default the world axes); vertices outside ``mask`` stay. Linear in
+    the activation, so a rig precomputes it as a basis field.
+    """
+    points = np.asarray(points, dtype=float)
+    axes = np.eye(3) if axes is None else np.asarray(axes, dtype=float)
+    local = (points - np.asarray(centre, dtype=float)) @ axes.T
+    d2 = ((local / np.asarray(radii, dtype=float)) ** 2).sum(axis=1)
+    w = np.exp(-d2) * np.asarray(mask, dtype=float)
+    return w[:, None] * np.asarray(direction, dtype=float)[None, :]
