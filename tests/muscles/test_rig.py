@@ -25,14 +25,15 @@ def rig():
 
 
 TONGUE = ("tongue_tip_raise", "tongue_protrusion", "tongue_dorsum_raise", "tongue_groove", "tongue_retraction")
+LIPS = ("lip_rounding", "lower_lip_tuck", "corner_seal")
 
 
 def test_names_and_ranges(rig):
     expect = (tuple(f"{p}_{s}" for p in PAIRS for s in ("left", "right")) + ("orbicularis_oris",) + TONGUE
-              + ("jaw",))
-    assert rig.names == expect and len(rig.muscles) == 30
-    assert rig.ranges.shape == (31, 2) and np.all(rig.ranges[:, 0] < rig.ranges[:, 1])
-    assert rig.bases.shape == (30, rig.face.n_vertices, 3)
+              + LIPS + ("jaw",))
+    assert rig.names == expect and len(rig.muscles) == 33
+    assert rig.ranges.shape == (34, 2) and np.all(rig.ranges[:, 0] < rig.ranges[:, 1])
+    assert rig.bases.shape == (33, rig.face.n_vertices, 3)
     # Every muscle moves something, by millimetres, not metres.
     mags = np.linalg.norm(rig.bases, axis=2).max(axis=1)
     assert np.all(mags > 0.002) and np.all(mags < 0.02)

@@ -117,7 +117,7 @@ def _teeth(upper: bool) -> Part:
     verts, quads, cols = [], [], []
     for side in (-1.0, 1.0):
         for i, w in enumerate(widths):
-            gap = 0.00025
+            gap = 0.00008          # crowns touch at their contact points
             s = side * np.array([edges[i] + gap, edges[i + 1] - gap])
             p, n, _ = _arch(z0, s)
             incisor = i < 2

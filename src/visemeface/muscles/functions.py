@@ -296,21 +296,34 @@ def jaw_rotation_displacement(points: np.ndarray, joint_left, joint_right, angle
 
 
 def local_displacement(points: np.ndarray, centre, radii, direction, mask: np.ndarray,
-                       axes: np.ndarray | None = None) -> np.ndarray:
-    r"""A smooth local push (N, 3) at activation 1: the tongue's and the lids' controls.
+                       axes: np.ndarray | None = None, inner: float | None = None) -> np.ndarray:
+    r"""A smooth local push (N, 3) at activation 1: the tongue's and the lip shaping's functions.
 
     Each vertex in ``mask`` moves along ``direction`` (a vector, m) scaled by a
     Gaussian of its ellipsoidal distance to ``centre``,
 
-    .. math:: \Delta\mathbf p = \mathbf d\,\exp\Big(-\sum_k \big((p_k - c_k)/r_k\big)^2\Big),
+    .. math:: \Delta\mathbf p = \mathbf d\,\exp\Big(-\sum_k \big(q_k / r_k\big)^2\Big),
+              \quad \mathbf q = A(\mathbf p - \mathbf c),
 
     with per-axis radii ``radii`` (m) along the rows of ``axes`` (a rig's mouth
-    frame; default the world axes); vertices outside ``mask`` stay. Linear in
-    the activation, so a rig precomputes it as a basis field.
+    frame; default the world axes); vertices outside ``mask`` stay. With
+    ``inner`` (m) the lateral factor is a *band* instead,
+    :math:`s\big((|q_x| - \text{inner}) / r_x\big)` (``smoothstep``): nothing moves
+    within ``inner`` of the centre, everything beyond ``inner + r_x`` fully, and the
+    x component of ``direction`` points away from the centre line on each side
+    (negative: toward it). Linear in the activation, so a rig precomputes it as a
+    basis field.
     """
     points = np.asarray(points, dtype=float)
     axes = np.eye(3) if axes is None else np.asarray(axes, dtype=float)
     local = (points - np.asarray(centre, dtype=float)) @ axes.T
-    d2 = ((local / np.asarray(radii, dtype=float)) ** 2).sum(axis=1)
-    w = np.exp(-d2) * np.asarray(mask, dtype=float)
-    return w[:, None] * np.asarray(direction, dtype=float)[None, :]
+    q = local / np.asarray(radii, dtype=float)
+    d = np.broadcast_to(np.asarray(direction, dtype=float), points.shape).copy()
+    if inner is None:
+        w = np.exp(-(q ** 2).sum(axis=1))
+    else:
+        w = np.exp(-(q[:, 1:] ** 2).sum(axis=1)) * smoothstep(inner, inner + radii[0], np.abs(local[:, 0]))
+        dl = d @ axes.T                                  # direction in the frame, x flipped on the -x side
+        dl[:, 0] *= np.where(local[:, 0] < 0, -1.0, 1.0)
+        d = dl @ axes
+    return (w * np.asarray(mask, dtype=float))[:, None] * d

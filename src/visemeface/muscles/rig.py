@@ -117,13 +117,23 @@ class Muscle:
     radii: np.ndarray | None = None        # "local": Gaussian radii (m) per axis
     direction: np.ndarray | None = None    # "local": displacement (m) at the centre at activation 1
     mask: np.ndarray | None = None         # "local": (N,) bool, the vertices it may move
+    symmetric: bool = False                # "local": plus its mirror image about the mouth's mid-plane
+    direction_lower: np.ndarray | None = None   # "local": the lower lip's direction (lip-trimmed), if any
+    inner: float | None = None             # "local": a lateral band from this distance (m) instead of a Gaussian
 
-    def field(self, points: np.ndarray, frame: MouthFrame) -> np.ndarray:
-        """Untrimmed displacement (N, 3) at activation 1."""
+    def field(self, points: np.ndarray, frame: MouthFrame, direction: np.ndarray | None = None) -> np.ndarray:
+        """Untrimmed displacement (N, 3) at activation 1 (a local function's ``direction`` may be replaced)."""
         if self.kind == "local":
             if self.mask is None or not self.mask.any():
                 return np.zeros_like(np.asarray(points, dtype=float))
-            return mf.local_displacement(points, self.centre, self.radii, self.direction, self.mask, frame.axes)
+            d = self.direction if direction is None else direction
+            out = mf.local_displacement(points, self.centre, self.radii, d, self.mask, frame.axes, self.inner)
+            if self.symmetric:
+                ex = frame.axes[0]
+                c = self.centre - 2 * ((self.centre - frame.origin) @ ex) * ex
+                out = out + mf.local_displacement(points, c, self.radii, d - 2 * (d @ ex) * ex, self.mask,
+                                                  frame.axes)
+            return out
         if self.kind == "linear":
             return mf.linear_muscle_displacement(points, self.attachment, self.insertion, self.zone_angle,
                                                  self.falloff_start, self.falloff_end, self.k)
@@ -161,6 +171,9 @@ class MuscleRig:
         bases = np.zeros((len(muscles), len(rest), 3))
         for i, m in enumerate(muscles):
             b = m.field(rest, frame)
+            if m.kind == "local" and m.direction_lower is not None:
+                # one function moving the two lips differently (rounding: the lips' sides meet)
+                b = b * self.upper_weight[:, None] + m.field(rest, frame, m.direction_lower) * lower[:, None]
             if m.lip == "upper":
                 b *= self.upper_weight[:, None]
             elif m.lip == "lower":

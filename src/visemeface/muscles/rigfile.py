@@ -209,28 +209,49 @@ def muscles_from(reader: _RigFileReader) -> list:
     return muscles
 
 
+def _vector(reader: _RigFileReader, table: Mapping, base: str, fld: str) -> np.ndarray:
+    value = table.get(fld)
+    if (not isinstance(value, list) or len(value) != 3
+            or not all(isinstance(x, (int, float)) and not isinstance(x, bool) and np.isfinite(x) for x in value)):
+        raise reader.error(base, fld, f"expected [x, y, z] in mouth widths, got {value!r}")
+    return np.array(value, dtype=float)
+
+
 def _local_muscle(reader: _RigFileReader, table: Mapping, base: str, side: str, m) -> None:
-    """Fill a "local" function (tongue, lids): it moves only its ``regions``, never trimmed or excluded."""
+    """Fill a "local" function (tongue, lip rounding, lip tuck).
+
+    It moves the vertices of its ``regions`` (all when none are named) except its
+    own ``exclude`` regions (the rig's default exclusions do not apply: the tongue's
+    functions move the tongue). ``symmetric = true`` adds the mirror image about
+    the mouth's mid-plane; ``direction_lower`` moves the lower lip (lip-trimmed)
+    differently from the upper; ``inner`` (W) makes the lateral falloff a band
+    (:func:`~visemeface.muscles.functions.local_displacement`).
+    """
     W = reader.frame.width
-    m.exclude = ()
-    regions = reader.regions(reader.get(table, base, "regions", "regions"), base, "regions")
+    names = reader.get(table, base, "regions", "regions", ())
+    regions = reader.regions(names, base, "regions")
+    m.exclude = reader.regions(reader.get(table, base, "exclude", "regions", ()), base, "exclude")
     mask = np.zeros(len(reader.face.vertices), bool)
+    if not names:
+        mask[:] = True
     for region in regions:
         mask[reader.face.regions[region]] = True
     m.mask = mask
-    vectors = {}
-    for fld in ("radius", "direction"):
-        value = table.get(fld)
-        if (not isinstance(value, list) or len(value) != 3
-                or not all(isinstance(x, (int, float)) and not isinstance(x, bool) and np.isfinite(x) for x in value)):
-            raise reader.error(base, fld, f"expected [x, y, z] in mouth widths, got {value!r}")
-        v = np.array(value, dtype=float)
-        if side == "right" and fld == "direction":
-            v[0] = -v[0]
-        vectors[fld] = v
-    if not np.all(vectors["radius"] > 0):
+    radius = _vector(reader, table, base, "radius")
+    if not np.all(radius > 0):
         raise reader.error(base, "radius", f"radii must be positive, got {table['radius']!r}")
-    m.radii = vectors["radius"] * W
-    m.direction = vectors["direction"] @ reader.frame.axes * W
+    m.radii = radius * W
+    flip = np.array([-1.0 if side == "right" else 1.0, 1.0, 1.0])
+    m.direction = (_vector(reader, table, base, "direction") * flip) @ reader.frame.axes * W
+    if "direction_lower" in table:
+        m.direction_lower = (_vector(reader, table, base, "direction_lower") * flip) @ reader.frame.axes * W
+    sym = table.get("symmetric", False)
+    if not isinstance(sym, bool):
+        raise reader.error(base, "symmetric", f"expected true or false, got {sym!r}")
+    m.symmetric = sym
+    if "inner" in table:
+        m.inner = reader.get(table, base, "inner", float) * W
+        if m.inner < 0:
+            raise reader.error(base, "inner", f"must be >= 0, got {table['inner']!r}")
     # a face without the regions (a user's mesh without a tongue) gets a zero field: no landmark needed
     m.centre = reader.point(table, base, "centre", side) if mask.any() else np.zeros(3)
