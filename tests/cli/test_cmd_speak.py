@@ -429,3 +429,20 @@ def test_absurd_transcript_length_and_msaa_are_refused_before_work(short, capsys
     assert main(["speak", "short.txt", "--size", "32", "--msaa", "3", "-q"]) == 2
     assert "--msaa" in capsys.readouterr().err
     assert not (short / "huge.mp4").exists() and not (short / "short.mp4").exists()
+
+
+def test_say_blinks_by_default_and_not_with_no_blink(short):
+    from visemeface.speech.timeline import load_track
+
+    text = "the quick brown fox jumps over the lazy dog " * 3
+    assert main(["say", text, "--no-video", "--track", "b.csv", "-q"]) == 0
+    assert main(["say", text, "--no-video", "--track", "n.csv", "--no-blink", "-q"]) == 0
+    blink, none = load_track(short / "b.csv"), load_track(short / "n.csv")
+    shut = blink["upper_lid_close_left"].to_numpy()
+    assert shut.max() > 0.9 and (shut > 0.5).sum() >= 2                 # blinks in the lid channel
+    assert "upper_lid_close_left" not in none or none["upper_lid_close_left"].max() == 0
+    # the tongue's channels are in the track too
+    assert blink["tongue_tip_raise"].max() > 0.5
+    # deterministic: the same command blinks the same
+    assert main(["say", text, "--no-video", "--track", "c.csv", "-q"]) == 0
+    assert (short / "b.csv").read_bytes() == (short / "c.csv").read_bytes()

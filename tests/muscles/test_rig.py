@@ -26,14 +26,15 @@ def rig():
 
 TONGUE = ("tongue_tip_raise", "tongue_protrusion", "tongue_dorsum_raise", "tongue_groove", "tongue_retraction")
 LIPS = ("lip_rounding", "lower_lip_tuck", "corner_seal")
+LIDS = tuple(f"{n}_{s}" for n in ("upper_lid_close", "upper_lid_raise", "lower_lid_raise") for s in ("left", "right"))
 
 
 def test_names_and_ranges(rig):
     expect = (tuple(f"{p}_{s}" for p in PAIRS for s in ("left", "right")) + ("orbicularis_oris",) + TONGUE
-              + LIPS + ("jaw",))
-    assert rig.names == expect and len(rig.muscles) == 33
-    assert rig.ranges.shape == (34, 2) and np.all(rig.ranges[:, 0] < rig.ranges[:, 1])
-    assert rig.bases.shape == (33, rig.face.n_vertices, 3)
+              + LIPS + LIDS + ("jaw",))
+    assert rig.names == expect and len(rig.muscles) == 39
+    assert rig.ranges.shape == (40, 2) and np.all(rig.ranges[:, 0] < rig.ranges[:, 1])
+    assert rig.bases.shape == (39, rig.face.n_vertices, 3)
     # Every muscle moves something, by millimetres, not metres.
     mags = np.linalg.norm(rig.bases, axis=2).max(axis=1)
     assert np.all(mags > 0.002) and np.all(mags < 0.02)
@@ -387,3 +388,24 @@ def test_tongue_functions_skip_a_face_without_a_tongue(tmp_path):
     rig = MuscleRig.from_file(bare)
     i = rig.names.index("tongue_tip_raise")
     assert np.abs(rig.bases[i]).max() == 0
+
+
+def test_a_blink_closes_both_eyes_and_moves_nothing_else(rig):
+    face = rig.face
+    lids = {f"{n}_{s}": v for n, v in (("upper_lid_close", 1.0), ("lower_lid_raise", 0.4))
+            for s in ("left", "right")}
+    shut = rig.pose(lids)
+    moved = np.linalg.norm(shut - face.vertices, axis=1) > 1e-9
+    assert np.isin(np.flatnonzero(moved), np.union1d(face.regions["upper_lids"], face.regions["lower_lids"])).all()
+    for side in ("left", "right"):
+        eye = face.landmark_position(f"eye_centre_{side}")
+        near = lambda idx: idx[np.abs(face.vertices[idx, 0] - eye[0]) < 0.002]      # noqa: E731
+        up = near(face.regions["upper_lids"])
+        lo = near(face.regions["lower_lids"])
+        upper_margin = up[np.argmin(face.vertices[up, 1])]
+        lower_margin = lo[np.argmax(face.vertices[lo, 1])]
+        # open at rest (about 9 mm), shut in the blink (the margins meet within 1 mm)
+        assert face.vertices[upper_margin, 1] - face.vertices[lower_margin, 1] > 0.007
+        assert abs(shut[upper_margin, 1] - shut[lower_margin, 1]) < 0.001
+        # the closed lid stays in front of the eyeball's front (no eye showing through)
+        assert shut[upper_margin, 2] > eye[2]

@@ -133,6 +133,10 @@ def test_expressions_seven_emotions_facs_and_one_sided_contempt(rig, expressions
     assert info.loc["happiness", "action_units"].count("AU12") == 1
     assert expressions.loc["happiness", "zygomatic_major_left"] > 0.5
     assert expressions.loc["surprise", "jaw"] > 0 and expressions.loc["sadness", "depressor_anguli_oris_left"] > 0
+    # the lids: surprise widens (AU5), happiness narrows from below (AU6), anger tightens (AU7)
+    assert expressions.loc["surprise", "upper_lid_raise_left"] > 0.5
+    assert expressions.loc["happiness", "lower_lid_raise_left"] > 0.5
+    assert expressions.loc["anger", "lower_lid_raise_left"] > 0.5
     for e in expressions.index:
         row = expressions.loc[e]
         left = row[[c for c in row.index if c.endswith("_left")]].to_numpy()

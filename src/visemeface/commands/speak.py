@@ -47,6 +47,8 @@ def add_animation_arguments(p: argparse.ArgumentParser, video_default: str) -> N
     anim.add_argument("--interp", choices=MODES, default=MODES[0],
                       help="interpolation between visemes (default: Cohen-Massaro coarticulation)")
     anim.add_argument("--fps", type=float, default=30.0, help="frame rate (default 30)")
+    anim.add_argument("--no-blink", action="store_true",
+                      help="do not blink (default: about 17 blinks a minute, at word boundaries, the same every run)")
     anim.add_argument("--audio", type=Path, metavar="WAV",
                       help="sound to mux into the MP4 (starts at t=0; padded or cut to the animation)")
     opt.add_face_arguments(p)
@@ -112,6 +114,9 @@ def animate_utterance(utterance, args, sinks, render, physics) -> int:
     ranges = {n: tuple(r) for n, r in zip(rig.names, rig.ranges)}
     track = activation_track(utterance, load_visemes(rig=rig), fps=args.fps, mode=args.interp,
                              emotions=emotions or None, ranges=ranges)
+    if not args.no_blink:
+        from visemeface.speech.blinks import blink_utterance
+        track = blink_utterance(track, rig, utterance)
     if args.audio is not None and any(s.name == "video" for s in sinks):
         _warn_audio_length(args.audio, track, args.fps)
     if physics is None:

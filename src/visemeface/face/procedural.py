@@ -296,12 +296,20 @@ def _regions(g: _Grid, V: np.ndarray, eye_sets, cav_idx, n_cav, parts) -> dict:
     nose = grid_all[(np.abs(Xv) < 0.022) & (Yv > _Y_SUBNASALE - 0.002) & (Yv < 0.07) & (g.h > 0.003)]
     in_eye = np.abs(np.abs(g.X) - _EYE_X) <= _EYE_HALF_W + 1e-12
     lid_margin = np.unique(np.concatenate([g.idx_up[g.jlid][in_eye], g.idx_up[g.jlid + 1][in_eye]]))
+    # the lids: skin over the eyeball from each margin to 12 mm above (upper) or 9 mm below (lower)
+    near_eye = np.abs(np.abs(Xv) - _EYE_X) <= _EYE_HALF_W + 0.004
+    upper_lids = grid_all[near_eye & (Yv >= Yv[g.idx_up[g.jlid + 1, g.ic]] - 1e-9) & (Yv <= _EYE_Y + 0.017)
+                          & (np.abs(Yv - _EYE_Y) < 0.02)]
+    upper_lids = np.union1d(upper_lids, g.idx_up[g.jlid + 1][in_eye])
+    lower_lids = grid_all[near_eye & (Yv <= _EYE_Y) & (Yv >= _EYE_Y - 0.013)]
+    lower_lids = np.union1d(np.setdiff1d(lower_lids, upper_lids), g.idx_up[g.jlid][in_eye])
     regions = {
         "upper_lip": upper_lip, "lower_lip": lower_lip,
         "lip_seam_upper": g.idx_up[js, icr:icl + 1], "lip_seam_lower": g.idx_lo[js, icr:icl + 1],
         "jaw": jaw, "fixed": fixed, "brow": brow, "cheek": cheek, "nose": nose,
         "eyes": np.concatenate(eye_sets + [lid_margin]),
         "mouth_cavity": np.concatenate([walls] + list(parts.values())), "cavity_wall": walls,
+        "upper_lids": upper_lids, "lower_lids": lower_lids,
         "boundary": boundary,
     }
     regions.update(parts)
