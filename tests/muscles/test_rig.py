@@ -27,14 +27,15 @@ def rig():
 TONGUE = ("tongue_tip_raise", "tongue_protrusion", "tongue_dorsum_raise", "tongue_groove", "tongue_retraction")
 LIPS = ("lip_rounding", "lower_lip_tuck", "corner_seal")
 LIDS = tuple(f"{n}_{s}" for n in ("upper_lid_close", "upper_lid_raise", "lower_lid_raise") for s in ("left", "right"))
+GAZE = tuple(f"{n}_{s}" for n in ("eye_turn_horizontal", "eye_turn_vertical") for s in ("left", "right"))
 
 
 def test_names_and_ranges(rig):
     expect = (tuple(f"{p}_{s}" for p in PAIRS for s in ("left", "right")) + ("orbicularis_oris",) + TONGUE
-              + LIPS + LIDS + ("jaw",))
-    assert rig.names == expect and len(rig.muscles) == 39
-    assert rig.ranges.shape == (40, 2) and np.all(rig.ranges[:, 0] < rig.ranges[:, 1])
-    assert rig.bases.shape == (39, rig.face.n_vertices, 3)
+              + LIPS + LIDS + GAZE + ("jaw",))
+    assert rig.names == expect and len(rig.muscles) == 43
+    assert rig.ranges.shape == (44, 2) and np.all(rig.ranges[:, 0] < rig.ranges[:, 1])
+    assert rig.bases.shape == (43, rig.face.n_vertices, 3)
     # Every muscle moves something, by millimetres, not metres.
     mags = np.linalg.norm(rig.bases, axis=2).max(axis=1)
     assert np.all(mags > 0.002) and np.all(mags < 0.02)
@@ -409,3 +410,17 @@ def test_a_blink_closes_both_eyes_and_moves_nothing_else(rig):
         assert abs(shut[upper_margin, 1] - shut[lower_margin, 1]) < 0.001
         # the closed lid stays in front of the eyeball's front (no eye showing through)
         assert shut[upper_margin, 2] > eye[2]
+
+
+def test_gaze_turns_each_iris_and_nothing_else(rig):
+    face = rig.face
+    for side in ("left", "right"):
+        pupil = face.landmarks[f"eye_centre_{side}"]
+        mine = np.intersect1d(face.regions["eyeballs"],
+                              np.flatnonzero(np.sign(face.vertices[:, 0]) == (1 if side == "left" else -1)))
+        for name, axis, deg in ((f"eye_turn_horizontal_{side}", 0, 20.0), (f"eye_turn_vertical_{side}", 1, 15.0)):
+            b = rig.bases[rig.names.index(name)]
+            moved = np.flatnonzero(np.linalg.norm(b, axis=1) > 0)
+            assert np.isin(moved, mine).all()                       # one eyeball, nothing else
+            # the pupil moves sideways (up) by about r sin(angle), r = 9.5 mm behind the pupil
+            assert b[pupil, axis] == pytest.approx(0.0095 * np.radians(deg), rel=0.1)

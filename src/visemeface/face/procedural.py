@@ -309,7 +309,7 @@ def _regions(g: _Grid, V: np.ndarray, eye_sets, cav_idx, n_cav, parts) -> dict:
         "jaw": jaw, "fixed": fixed, "brow": brow, "cheek": cheek, "nose": nose,
         "eyes": np.concatenate(eye_sets + [lid_margin]),
         "mouth_cavity": np.concatenate([walls] + list(parts.values())), "cavity_wall": walls,
-        "upper_lids": upper_lids, "lower_lids": lower_lids,
+        "upper_lids": upper_lids, "lower_lids": lower_lids, "eyeballs": np.concatenate(eye_sets),
         "boundary": boundary,
     }
     regions.update(parts)

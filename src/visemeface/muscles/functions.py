@@ -23,6 +23,7 @@ __all__ = [
     "jaw_centre_weight",
     "jaw_rotation_displacement",
     "local_displacement",
+    "turn_displacement",
 ]
 
 
@@ -327,3 +328,25 @@ def local_displacement(points: np.ndarray, centre, radii, direction, mask: np.nd
         dl[:, 0] *= np.where(local[:, 0] < 0, -1.0, 1.0)
         d = dl @ axes
     return (w * np.asarray(mask, dtype=float))[:, None] * d
+
+
+def turn_displacement(points: np.ndarray, centre, axis, angle: float, mask: np.ndarray,
+                      radius: float | None = None, view=(0.0, 0.0, 1.0)) -> np.ndarray:
+    r"""A small rotation (N, 3) of the vertices in ``mask`` about ``axis`` through ``centre``, linearised:
+
+    .. math:: \Delta\mathbf p = w\,\theta\,\mathbf k \times (\mathbf p - \mathbf c),
+
+    exact to first order in :math:`\theta`. With ``radius`` only the part within
+    ``radius`` of the line through ``centre`` along ``view`` turns (:math:`w` falls
+    from 1 at 0.7 ``radius`` to 0 at ``radius``): the iris slides over the sclera,
+    and the eyeball's wide sides stay under the lids.
+    """
+    points = np.asarray(points, dtype=float)
+    k = _unit(axis)
+    r = points - np.asarray(centre, dtype=float)
+    w = np.asarray(mask, dtype=float)
+    if radius is not None:
+        v = _unit(view)
+        d = np.linalg.norm(r - np.outer(r @ v, v), axis=1)
+        w = w * smoothstep(radius, 0.7 * radius, d)
+    return float(angle) * np.cross(k, r) * w[:, None]

@@ -95,7 +95,7 @@ class Muscle:
     """One muscle placed on a face (positions in metres, angles in radians)."""
 
     name: str
-    kind: str  # "linear" | "sphincter" | "local"
+    kind: str  # "linear" | "sphincter" | "local" | "turn"
     side: str  # "left" | "right" | "centre"
     lip: str  # "upper" | "lower" | "both"
     range: tuple
@@ -120,9 +120,14 @@ class Muscle:
     symmetric: bool = False                # "local": plus its mirror image about the mouth's mid-plane
     direction_lower: np.ndarray | None = None   # "local": the lower lip's direction (lip-trimmed), if any
     inner: float | None = None             # "local": a lateral band from this distance (m) instead of a Gaussian
+    axis: np.ndarray | None = None         # "turn": rotation axis (world), angle in ``k`` (radians at 1);
+    #                                        ``inner`` is then the radius of the part that turns (m)
 
     def field(self, points: np.ndarray, frame: MouthFrame, direction: np.ndarray | None = None) -> np.ndarray:
         """Untrimmed displacement (N, 3) at activation 1 (a local function's ``direction`` may be replaced)."""
+        if self.kind == "turn":
+            return mf.turn_displacement(points, self.centre, self.axis, self.k, self.mask, self.inner,
+                                        frame.axes[2])
         if self.kind == "local":
             if self.mask is None or not self.mask.any():
                 return np.zeros_like(np.asarray(points, dtype=float))

@@ -19,7 +19,7 @@ from visemeface.errors import InputError, close_matches
 #: Region names of docs/conventions.md (a rig file may name them even if a mesh lacks some).
 CONVENTION_REGIONS = ("upper_lip", "lower_lip", "lip_seam_upper", "lip_seam_lower", "jaw", "fixed", "brow",
                       "cheek", "mouth_cavity", "eyes", "cavity_wall", "upper_teeth", "lower_teeth", "upper_gum",
-                      "lower_gum", "tongue", "upper_lids", "lower_lids")
+                      "lower_gum", "tongue", "upper_lids", "lower_lids", "eyeballs")
 LIP_SIDES = ("upper", "lower", "both")
 
 
@@ -151,8 +151,8 @@ def muscles_from(reader: _RigFileReader) -> list:
         if not isinstance(table.get("name"), str):
             raise reader.error(base, "name", "missing")
         kind = reader.get(table, base, "kind", str)
-        if kind not in ("linear", "sphincter", "local"):
-            raise reader.error(base, "kind", f"expected 'linear', 'sphincter' or 'local', got {kind!r}")
+        if kind not in ("linear", "sphincter", "local", "turn"):
+            raise reader.error(base, "kind", f"expected 'linear', 'sphincter', 'local' or 'turn', got {kind!r}")
         lip = reader.get(table, base, "lip", str)
         if lip not in LIP_SIDES:
             raise reader.error(base, "lip", f"expected one of {', '.join(LIP_SIDES)}, got {lip!r}")
@@ -168,6 +168,8 @@ def muscles_from(reader: _RigFileReader) -> list:
                        description=str(table.get("description", "")), params=dict(table))
             if kind == "local":
                 _local_muscle(reader, table, base, side, m)
+            elif kind == "turn":
+                _turn_muscle(reader, table, base, side, m)
             elif kind == "linear":
                 m.k = reader.get(table, base, "k", float) * W
                 m.attachment = reader.point(table, base, "attachment", side)
@@ -255,3 +257,27 @@ def _local_muscle(reader: _RigFileReader, table: Mapping, base: str, side: str, 
             raise reader.error(base, "inner", f"must be >= 0, got {table['inner']!r}")
     # a face without the regions (a user's mesh without a tongue) gets a zero field: no landmark needed
     m.centre = reader.point(table, base, "centre", side) if mask.any() else np.zeros(3)
+
+
+def _turn_muscle(reader: _RigFileReader, table: Mapping, base: str, side: str, m) -> None:
+    """Fill a "turn" function (the eyeballs' gaze): its ``regions`` turn about ``axis`` (mouth frame)
+    through ``centre`` by ``angle_deg`` at activation 1 (linearised), within ``radius`` (W) of the
+    forward line through ``centre`` when given; a face without the regions gets a zero field."""
+    names = reader.get(table, base, "regions", "regions")
+    regions = reader.regions(names, base, "regions")
+    m.exclude = ()
+    mask = np.zeros(len(reader.face.vertices), bool)
+    for region in regions:
+        mask[reader.face.regions[region]] = True
+    # only the side's own part of the regions (one eyeball of "eyeballs")
+    m.mask = mask
+    m.axis = _vector(reader, table, base, "axis") @ reader.frame.axes
+    if not np.linalg.norm(m.axis) > 0:
+        raise reader.error(base, "axis", "must not be zero")
+    m.k = np.radians(reader.get(table, base, "angle_deg", float))
+    radius = reader.get(table, base, "radius", float, None)
+    m.inner = None if radius is None else radius * reader.frame.width
+    m.centre = reader.point(table, base, "centre", side) if mask.any() else np.zeros(3)
+    if mask.any() and side in ("left", "right"):
+        x = reader.frame.to_local(reader.face.vertices)[:, 0]
+        m.mask = mask & ((x > 0) if side == "left" else (x < 0))
