@@ -1,4 +1,4 @@
-"""The Waters muscle rig: 25 muscles and the jaw placed on any face mesh.
+"""The Waters muscle rig: 25 muscles, the tongue's, lips', lids' and eyes' functions and the jaw on any face mesh.
 
 A rig file (TOML, ``data/rig/default.toml``) places every muscle relative to
 the face's landmarks, in a *mouth frame* measured on the mesh: origin the
@@ -20,7 +20,11 @@ muscle's range (seed 002 §2.1.3) with a warning naming the muscles.
 Rig file format
 ---------------
 ``[trim]`` (lip-trim surface), ``[defaults]`` (``exclude``: regions no muscle
-moves), ``[jaw]`` and one ``[[muscle]]`` table per muscle or left/right pair.
+moves), ``[jaw]`` (``rigid``: regions that turn with the mandible, weight 1) and one
+``[[muscle]]`` table per function or left/right pair: ``kind`` "linear" or
+"sphincter" (Waters), "local" (a Gaussian push on some regions: tongue, lip
+shaping, lids; :func:`~visemeface.muscles.functions.local_displacement`) or "turn"
+(a linearised rotation: gaze). The file is read by :mod:`visemeface.muscles.rigfile`.
 A point is ``{at = "landmark", offset = [x, y, z]}`` or
 ``{mix = {landmark = weight, ...}, offset = [...]}`` with the offset in mouth
 widths along the mouth frame. In a pair (``sides = ["left", "right"]``) the
