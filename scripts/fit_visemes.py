@@ -43,6 +43,17 @@ DECIMALS = 4
 EXCLUDED = ("zygomatic_major_left", "zygomatic_major_right")
 
 
+def articulation() -> dict:
+    """Per symbol, the functions set by phonetics, not fitted (``data/visemes/articulation.csv``):
+    the tongue's (the lip gauge cannot see the tongue), lip rounding and the lower-lip tuck.
+    They are held while the twelve speech functions are fitted, then copied into the table."""
+    from visemeface.resources import data_path
+
+    with open(data_path("visemes", "articulation.csv"), newline="") as f:
+        return {r["symbol"]: {k: float(v) for k, v in r.items() if k not in ("symbol", "source")}
+                for r in csv.DictReader(f)}
+
+
 def fit_table(rig=None, targets=None):
     """Fit every posture; return (rows, report) with rows as dicts for the CSV."""
     from visemeface.muscles.fitting import fit_activations
@@ -55,17 +66,19 @@ def fit_table(rig=None, targets=None):
     targets = load_targets() if targets is None else targets
     fitted = [f for f in SPEECH_FUNCTIONS if f not in EXCLUDED]
     rows, report = [], []
+    held = articulation()
     for sym, t in progress(list(targets.iterrows()), desc="fitting", unit="viseme"):
         goal = {k: float(t[k]) for k in TARGET_DIMENSIONS}
         if all(v == 0 for v in goal.values()):
             acts = dict.fromkeys(SPEECH_FUNCTIONS, 0.0)  # rest posture: nothing to fit
             achieved = dict(goal)
         else:
-            a = fit_activations(rig, goal, functions=fitted, symmetric=True, weights=WEIGHTS)
+            a = fit_activations(rig, goal, functions=fitted, symmetric=True, weights=WEIGHTS, base=held[sym])
             acts = {f: round(float(a[f]), DECIMALS) for f in SPEECH_FUNCTIONS}
             achieved = a.attrs["achieved"]
         err = {k: achieved[k] - goal[k] for k in TARGET_DIMENSIONS}
-        rows.append({"index": int(t["index"]), "symbol": sym, "class": t["class"], **acts, "notes": t["notes"]})
+        rows.append({"index": int(t["index"]), "symbol": sym, "class": t["class"], **acts, **held[sym],
+                     "notes": t["notes"]})
         report.append({"symbol": sym, "target": {k: round(v, 4) for k, v in goal.items()},
                        "achieved": {k: round(achieved[k], 4) for k in TARGET_DIMENSIONS},
                        "max_abs_error": round(max(abs(v) for v in err.values()), 4),

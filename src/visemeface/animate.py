@@ -56,7 +56,8 @@ def simulated_motion(rig, track, physics: str, settings=None):
 
 def animate(utterance, sinks: list, render=None, *, rig=None, emotions=None, interp: str | None = None,
             fps: float = 30.0, audio=None, physics: str | None = None, physics_settings=None,
-            checkpoint: Callable | None = None, resume: bool = False, show_progress: bool = True, source: str = "text"):
+            checkpoint: Callable | None = None, resume: bool = False, show_progress: bool = True, source: str = "text",
+            blink: bool = True):
     """Animate ``utterance`` into ``sinks``; returns the run's :class:`~visemeface.pipeline.RunStats`.
 
     Parameters
@@ -83,6 +84,8 @@ def animate(utterance, sinks: list, render=None, *, rig=None, emotions=None, int
         Continue from the checkpoint and reuse kept frames.
     source : str
         Where the utterance came from (a transcript's path, or "text"), recorded by exports that name it.
+    blink : bool
+        Blink at a natural rate (:func:`visemeface.speech.blinks.blink_utterance`, deterministic).
     """
     from visemeface import pipeline
     from visemeface.motion import KinematicMotion
@@ -99,6 +102,10 @@ def animate(utterance, sinks: list, render=None, *, rig=None, emotions=None, int
     ranges = {n: tuple(r) for n, r in zip(rig.names, rig.ranges)}
     track = activation_track(utterance, load_visemes(rig=rig), fps=fps, mode=interp or MODES[0],
                              emotions=emotions or None, ranges=ranges)
+    if blink:
+        from visemeface.speech.blinks import blink_utterance
+
+        track = blink_utterance(track, rig, utterance)
     if audio is not None and any(s.name == "video" for s in sinks):
         _warn_audio_length(audio, track, fps)
     if physics is None or physics == "none":

@@ -69,7 +69,8 @@ def test_muscles_lists_all_functions(capsys):
     assert main(["muscles", "--csv"]) == 0
     lines = capsys.readouterr().out.strip().splitlines()
     assert lines[0].startswith("name,kind,side,min,max,lip")
-    assert len(lines) == 1 + 26
+    assert len(lines) == 1 + 44          # 25 muscles, 5 tongue, 3 lip-shaping, 6 lid, 4 gaze functions, the jaw
+    assert any(line.startswith("tongue_tip_raise,local,centre,0.0,1.0,both") for line in lines)
     assert any(line.startswith("orbicularis_oris,sphincter,centre,0.0,1.0,both") for line in lines)
     assert main(["muscles"]) == 0
     assert "depressor_labii_inferioris_left" in capsys.readouterr().out

@@ -183,12 +183,13 @@ def test_speak_end_to_end_all_exports(short, capsys):
     assert len(profile) == N_SHORT
     assert profile["count"][6] == 0 and profile["count"][10] >= 1 and profile["area"][10] > 0
 
-    # glTF: 25 muscle targets + jaw samples; plays the rig's poses; lasts the utterance
+    # glTF: 25 muscle and 5 tongue targets + jaw samples; plays the rig's poses; lasts the utterance
     gl, arr = _glb_arrays(short / "s.glb")
     prim = gl.meshes[0].primitives[0]
     tnames = gl.meshes[0].extras["targetNames"]
-    assert tnames[:25] == list(rig.names[:25])
-    assert all(n.startswith("jaw@") for n in tnames[25:]) and len(tnames) >= 25 + JAW_SAMPLES
+    m = len(rig.muscles)
+    assert tnames[:m] == list(rig.names[:m]) and "tongue_tip_raise" in tnames
+    assert all(n.startswith("jaw@") for n in tnames[m:]) and len(tnames) >= m + JAW_SAMPLES
     assert len(prim.targets) == len(tnames)
     sampler = gl.animations[0].samplers[0]
     times = arr(sampler.input)
@@ -428,3 +429,20 @@ def test_absurd_transcript_length_and_msaa_are_refused_before_work(short, capsys
     assert main(["speak", "short.txt", "--size", "32", "--msaa", "3", "-q"]) == 2
     assert "--msaa" in capsys.readouterr().err
     assert not (short / "huge.mp4").exists() and not (short / "short.mp4").exists()
+
+
+def test_say_blinks_by_default_and_not_with_no_blink(short):
+    from visemeface.speech.timeline import load_track
+
+    text = "the quick brown fox jumps over the lazy dog " * 3
+    assert main(["say", text, "--no-video", "--track", "b.csv", "-q"]) == 0
+    assert main(["say", text, "--no-video", "--track", "n.csv", "--no-blink", "-q"]) == 0
+    blink, none = load_track(short / "b.csv"), load_track(short / "n.csv")
+    shut = blink["upper_lid_close_left"].to_numpy()
+    assert shut.max() > 0.9 and (shut > 0.5).sum() >= 2                 # blinks in the lid channel
+    assert "upper_lid_close_left" not in none or none["upper_lid_close_left"].max() == 0
+    # the tongue's channels are in the track too
+    assert blink["tongue_tip_raise"].max() > 0.5
+    # deterministic: the same command blinks the same
+    assert main(["say", text, "--no-video", "--track", "c.csv", "-q"]) == 0
+    assert (short / "b.csv").read_bytes() == (short / "c.csv").read_bytes()

@@ -7,7 +7,7 @@ import scipy.sparse.csgraph
 from scipy.spatial import cKDTree
 
 from visemeface.errors import InputError
-from visemeface.face.mesh import LANDMARK_NAMES
+from visemeface.face.mesh import INTERIOR_LANDMARKS, LANDMARK_NAMES
 from visemeface.face.procedural import MOUTH_WIDTH, default_face, mirror_indices
 
 
@@ -27,10 +27,13 @@ def test_default_size_and_resolution_parameter():
     face = default_face()
     assert 3000 <= face.n_vertices <= 6000
     assert small.n_vertices < face.n_vertices < big.n_vertices
+    parts = ("upper_teeth", "lower_teeth", "upper_gum", "lower_gum", "tongue")
     for f, target in [(small, 1500), (face, 4500), (big, 12000)]:
-        assert 0.7 * target < f.n_vertices < 1.35 * target
+        # the resolution counts the skin, eyes and cavity walls; the interior adds a fixed ~500
+        interior = sum(len(f.regions[k]) for k in parts)
+        assert 0.7 * target < f.n_vertices - interior < 1.35 * target
         # every resolution keeps the same named parts and the mouth width
-        assert set(f.landmarks) == set(LANDMARK_NAMES)
+        assert set(f.landmarks) == set(LANDMARK_NAMES + INTERIOR_LANDMARKS)
         lm = f.landmarks
         width = f.vertices[lm["mouth_corner_left"], 0] - f.vertices[lm["mouth_corner_right"], 0]
         assert width == pytest.approx(MOUTH_WIDTH, abs=1e-12)
@@ -85,11 +88,12 @@ def test_open_boundaries_only_at_seam_eyes_and_rim(face):
     allowed = np.concatenate([face.regions[k] for k in
                               ("eyes", "boundary", "mouth_cavity", "lip_seam_upper", "lip_seam_lower")])
     assert np.setdiff1d(bv, allowed).size == 0
-    # loops: the outer rim, two eyelid openings, two eyeball rims, the two cavity sides
+    # loops: the outer rim, two eyelid openings, two eyeball rims, the two cavity sides,
+    # the two gum strips and the tongue (the teeth are closed)
     n = face.n_vertices
     g = scipy.sparse.coo_matrix((np.ones(len(be)), (be[:, 0], be[:, 1])), shape=(n, n))
     _, label = scipy.sparse.csgraph.connected_components(g, directed=False)
-    assert len(np.unique(label[bv])) == 7
+    assert len(np.unique(label[bv])) == 10
     # the rim is one loop holding every boundary-region vertex
     rim = face.regions["boundary"]
     assert len(np.unique(label[rim])) == 1
@@ -205,7 +209,34 @@ def test_colours_dark_cavity_red_lips(face):
     c = face.vertex_colors()
     assert c.shape == (face.n_vertices, 3) and c.dtype == np.float32
     lum = c @ np.array([0.299, 0.587, 0.114])
-    assert lum[face.regions["mouth_cavity"]].max() < 0.1
+    walls = face.regions["cavity_wall"]
+    assert lum[walls].max() < 0.2
+    # shaded dark toward the back: the deepest wall vertices are the darkest
+    z = face.vertices[walls, 2]
+    back, front = walls[z < np.quantile(z, 0.2)], walls[z > np.quantile(z, 0.8)]
+    assert lum[back].max() < 0.05 < lum[front].mean()
+    teeth = np.concatenate([face.regions["upper_teeth"], face.regions["lower_teeth"]])
+    assert lum[teeth].min() > 0.6 and (c[teeth].max(1) - c[teeth].min(1)).max() < 0.15   # bright, pale
+    tongue = c[face.regions["tongue"]]
+    assert (tongue[:, 0] > 1.4 * tongue[:, 1]).all()                                     # red, not grey
     lip = c[face.regions["lower_lip"]].mean(0)
     skin = c[face.landmarks["cheek_left"]]
     assert lip[0] / lip[1] > 1.25 * skin[0] / skin[1]   # redder than the skin
+
+
+def test_teeth_and_tongue_sit_inside_the_mouth(face):
+    v, r, lm = face.vertices, face.regions, face.landmarks
+    seam_z = v[lm["upper_lip_mid"], 2]
+    for name in ("upper_teeth", "lower_teeth", "upper_gum", "lower_gum", "tongue"):
+        p = v[r[name]]
+        assert p[:, 2].max() < seam_z - 0.005, name          # behind the lips' front by 5 mm or more
+        assert np.abs(p[:, 0]).max() < 0.03, name            # inside the cheeks
+    up, lo = v[lm["upper_incisor_edge"]], v[lm["lower_incisor_edge"]]
+    # a normal bite: upper incisors 1-3 mm below the seam, overlapping the lower ones by 2 mm, in front
+    assert -0.003 <= up[1] <= -0.001 and lo[1] - up[1] == pytest.approx(0.002, abs=1e-4)
+    assert up[2] > lo[2]
+    # the tongue lies behind the lower incisors and below their edge
+    tip = v[lm["tongue_tip"]]
+    assert tip[2] < lo[2] - 0.002 and tip[1] < lo[1]
+    # each crown is a closed box: 14 faces... 6 quads per tooth, 10 teeth per arch
+    assert len(r["upper_teeth"]) == len(r["lower_teeth"]) == 10 * 8

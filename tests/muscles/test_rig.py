@@ -24,11 +24,18 @@ def rig():
     return default_rig()
 
 
+TONGUE = ("tongue_tip_raise", "tongue_protrusion", "tongue_dorsum_raise", "tongue_groove", "tongue_retraction")
+LIPS = ("lip_rounding", "lower_lip_tuck", "corner_seal")
+LIDS = tuple(f"{n}_{s}" for n in ("upper_lid_close", "upper_lid_raise", "lower_lid_raise") for s in ("left", "right"))
+GAZE = tuple(f"{n}_{s}" for n in ("eye_turn_horizontal", "eye_turn_vertical") for s in ("left", "right"))
+
+
 def test_names_and_ranges(rig):
-    expect = tuple(f"{p}_{s}" for p in PAIRS for s in ("left", "right")) + ("orbicularis_oris", "jaw")
-    assert rig.names == expect and len(rig.muscles) == 25
-    assert rig.ranges.shape == (26, 2) and np.all(rig.ranges[:, 0] < rig.ranges[:, 1])
-    assert rig.bases.shape == (25, rig.face.n_vertices, 3)
+    expect = (tuple(f"{p}_{s}" for p in PAIRS for s in ("left", "right")) + ("orbicularis_oris",) + TONGUE
+              + LIPS + LIDS + GAZE + ("jaw",))
+    assert rig.names == expect and len(rig.muscles) == 43
+    assert rig.ranges.shape == (44, 2) and np.all(rig.ranges[:, 0] < rig.ranges[:, 1])
+    assert rig.bases.shape == (43, rig.face.n_vertices, 3)
     # Every muscle moves something, by millimetres, not metres.
     mags = np.linalg.norm(rig.bases, axis=2).max(axis=1)
     assert np.all(mags > 0.002) and np.all(mags < 0.02)
@@ -299,8 +306,8 @@ def test_mesh_without_eyes_region_still_rigs():
     ref = default_rig()
     regions = {k: v for k, v in ref.face.regions.items() if k != "eyes"}
     rig = MuscleRig.from_file(dataclasses.replace(ref.face, regions=regions))
-    assert rig.muscles[0].exclude == ()
-    text = _default_text().replace('exclude = ["eyes"]     # regions', 'exclude = ["eyse"]     # regions')
+    assert "eyes" not in rig.muscles[0].exclude and "tongue" in rig.muscles[0].exclude
+    text = _default_text().replace('exclude = ["eyes", "upper_teeth"', 'exclude = ["eyse", "upper_teeth"')
     with pytest.raises(InputError, match="unknown region 'eyse'.*did you mean: eyes"):
         import tempfile
         from pathlib import Path
@@ -345,3 +352,75 @@ def test_the_shared_default_rig_cannot_be_changed_by_one_caller():
     with pytest.raises(ValueError):
         shared.face.vertices[0, 0] = 1.0
     assert default_rig() is shared
+
+
+def test_teeth_are_bone_and_the_tongue_has_its_own_functions(rig):
+    face = rig.face
+    r = face.regions
+    up = np.concatenate([r["upper_teeth"], r["upper_gum"]])
+    lower = np.concatenate([r["lower_teeth"], r["lower_gum"]])
+    tongue = r["tongue"]
+    for i, m in enumerate(rig.muscles):
+        b = np.linalg.norm(rig.bases[i], axis=1)
+        assert b[up].max() == 0 and b[lower].max() == 0, m.name        # no function bends a tooth
+        if m.name in TONGUE:
+            assert b[tongue].max() > 0.002                            # millimetres of tongue
+            assert np.delete(b, tongue).max() == 0, m.name            # and nothing else
+        else:
+            assert b[tongue].max() == 0, m.name
+    # the jaw turns the lower teeth rigidly (distances kept) and leaves the upper teeth
+    open_ = rig.pose({"jaw": 1.0})
+    rest = face.vertices
+    assert np.abs(open_[up] - rest[up]).max() == 0
+    d0 = np.linalg.norm(rest[lower][:, None] - rest[lower][None], axis=2)
+    d1 = np.linalg.norm(open_[lower][:, None] - open_[lower][None], axis=2)
+    assert np.abs(d1 - d0).max() < 1e-6
+    drop = rest[face.landmarks["lower_incisor_edge"], 1] - open_[face.landmarks["lower_incisor_edge"], 1]
+    lip_drop = rest[face.landmarks["lower_lip_mid"], 1] - open_[face.landmarks["lower_lip_mid"], 1]
+    assert 0.012 < drop and abs(drop - lip_drop) < 0.006             # the teeth go down with the lip
+
+
+def test_tongue_functions_skip_a_face_without_a_tongue(tmp_path):
+    face = default_face(resolution=1500)
+    keep = {k: v for k, v in face.regions.items() if k != "tongue"}
+    from visemeface.face.mesh import FaceMesh
+    bare = FaceMesh(face.vertices, face.quads, face.tris, keep,
+                    {k: v for k, v in face.landmarks.items() if not k.startswith("tongue")}, face.colors)
+    rig = MuscleRig.from_file(bare)
+    i = rig.names.index("tongue_tip_raise")
+    assert np.abs(rig.bases[i]).max() == 0
+
+
+def test_a_blink_closes_both_eyes_and_moves_nothing_else(rig):
+    face = rig.face
+    lids = {f"{n}_{s}": v for n, v in (("upper_lid_close", 1.0), ("lower_lid_raise", 0.4))
+            for s in ("left", "right")}
+    shut = rig.pose(lids)
+    moved = np.linalg.norm(shut - face.vertices, axis=1) > 1e-9
+    assert np.isin(np.flatnonzero(moved), np.union1d(face.regions["upper_lids"], face.regions["lower_lids"])).all()
+    for side in ("left", "right"):
+        eye = face.landmark_position(f"eye_centre_{side}")
+        near = lambda idx: idx[np.abs(face.vertices[idx, 0] - eye[0]) < 0.002]      # noqa: E731
+        up = near(face.regions["upper_lids"])
+        lo = near(face.regions["lower_lids"])
+        upper_margin = up[np.argmin(face.vertices[up, 1])]
+        lower_margin = lo[np.argmax(face.vertices[lo, 1])]
+        # open at rest (about 9 mm), shut in the blink (the margins meet within 1 mm)
+        assert face.vertices[upper_margin, 1] - face.vertices[lower_margin, 1] > 0.007
+        assert abs(shut[upper_margin, 1] - shut[lower_margin, 1]) < 0.001
+        # the closed lid stays in front of the eyeball's front (no eye showing through)
+        assert shut[upper_margin, 2] > eye[2]
+
+
+def test_gaze_turns_each_iris_and_nothing_else(rig):
+    face = rig.face
+    for side in ("left", "right"):
+        pupil = face.landmarks[f"eye_centre_{side}"]
+        mine = np.intersect1d(face.regions["eyeballs"],
+                              np.flatnonzero(np.sign(face.vertices[:, 0]) == (1 if side == "left" else -1)))
+        for name, axis, deg in ((f"eye_turn_horizontal_{side}", 0, 20.0), (f"eye_turn_vertical_{side}", 1, 15.0)):
+            b = rig.bases[rig.names.index(name)]
+            moved = np.flatnonzero(np.linalg.norm(b, axis=1) > 0)
+            assert np.isin(moved, mine).all()                       # one eyeball, nothing else
+            # the pupil moves sideways (up) by about r sin(angle), r = 9.5 mm behind the pupil
+            assert b[pupil, axis] == pytest.approx(0.0095 * np.radians(deg), rel=0.1)

@@ -37,9 +37,10 @@ def test_targets_follow_articulatory_phonetics(targets):
     # bilabials closed; silence neutral
     assert (t.loc[["p", "b", "m"], "opening_height"] <= 0).all()  # closed, pressed
     assert (t.loc["_", list(lib.TARGET_DIMENSIONS)] == 0).all()
-    # labiodentals: lower lip raised (negative drop) and drawn back
-    assert (t.loc[["f", "v"], "lower_lip_drop"] < 0).all()
-    assert (t.loc[["f", "v"], "protrusion"] < 0).all()
+    # labiodentals: lower lip drawn back onto the upper incisors' edge (which lies 2.5 mm below
+    # the rest seam, so the lip's edge goes a little down, not up), upper lip lifted
+    assert (t.loc[["f", "v"], "protrusion"] < -0.05).all()
+    assert (t.loc[["f", "v"], "upper_lip_raise"] > 0).all()
     # rounded vowels narrower and more protruded than every spread vowel
     rounded, spread = t.loc[["ow", "uw", "w"]], t.loc[["iy", "ih", "ae"]]
     assert rounded.mouth_width.max() < spread.mouth_width.min()
@@ -96,9 +97,13 @@ def expressions(rig):
 def test_visemes_table_is_56_postures_of_the_12_speech_functions(rig, visemes):
     assert visemes.index.tolist() == list(DECTALK)
     assert visemes.columns.tolist() == list(rig.names)
-    others = [c for c in rig.names if c not in lib.SPEECH_FUNCTIONS]
+    # the face's muscles beyond the twelve stay 0; the tongue's and the lip-shaping functions
+    # carry data/visemes/articulation.csv
+    held = [c for c in rig.names if c.startswith("tongue_") or c in ("lip_rounding", "lower_lip_tuck", "corner_seal")]
+    others = [c for c in rig.names if c not in lib.SPEECH_FUNCTIONS and c not in held]
     assert (visemes[others] == 0).all().all()
-    assert len(lib.SPEECH_FUNCTIONS) == 12
+    assert len(lib.SPEECH_FUNCTIONS) == 12 and len(held) == 8
+    assert visemes.loc["th", "tongue_protrusion"] == 1 and visemes.loc["k", "tongue_dorsum_raise"] == 1
     lo, hi = rig.ranges[:, 0], rig.ranges[:, 1]
     assert ((visemes.to_numpy() >= lo) & (visemes.to_numpy() <= hi)).all()
     assert (visemes.loc["_"] == 0).all()
@@ -128,6 +133,10 @@ def test_expressions_seven_emotions_facs_and_one_sided_contempt(rig, expressions
     assert info.loc["happiness", "action_units"].count("AU12") == 1
     assert expressions.loc["happiness", "zygomatic_major_left"] > 0.5
     assert expressions.loc["surprise", "jaw"] > 0 and expressions.loc["sadness", "depressor_anguli_oris_left"] > 0
+    # the lids: surprise widens (AU5), happiness narrows from below (AU6), anger tightens (AU7)
+    assert expressions.loc["surprise", "upper_lid_raise_left"] > 0.5
+    assert expressions.loc["happiness", "lower_lid_raise_left"] > 0.5
+    assert expressions.loc["anger", "lower_lid_raise_left"] > 0.5
     for e in expressions.index:
         row = expressions.loc[e]
         left = row[[c for c in row.index if c.endswith("_left")]].to_numpy()

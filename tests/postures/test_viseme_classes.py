@@ -51,6 +51,14 @@ def test_samples_are_physically_plausible(samples):
     assert by.loc[["w", "ow"], "protrusion"].min() > by.loc[["ae", "eh", "ih"], "protrusion"].max()
 
 
+def test_image_features_see_the_mouth_interior(ct, samples):
+    img = samples[ct.feature_columns(samples)].to_numpy()
+    by = (samples["symbol"] + "/" + samples["condition"]).to_numpy()
+    n = img.shape[1] // 6                      # two views x (dark, teeth, red) maps
+    teeth = img[:, n:2 * n].sum(axis=1)        # the front view's teeth map
+    assert teeth[by == "m/1"].max() == 0 < teeth[by == "f/1"].min()
+
+
 def test_every_class_recognised_at_least_95_percent(ct, samples):
     m = ct.confusion(samples)
     assert m.shape == (8, 8)

@@ -48,6 +48,8 @@ def add_animation_arguments(p: argparse.ArgumentParser, video_default: str) -> N
     anim.add_argument("--interp", choices=MODES, default=MODES[0],
                       help="interpolation between visemes (default: Cohen-Massaro coarticulation)")
     anim.add_argument("--fps", type=float, default=30.0, help="frame rate (default 30)")
+    anim.add_argument("--no-blink", action="store_true",
+                      help="do not blink (default: about 17 blinks a minute, at word boundaries, the same every run)")
     anim.add_argument("--audio", type=Path, metavar="WAV",
                       help="sound to mux into the MP4 (starts at t=0; padded or cut to the animation)")
     opt.add_face_arguments(p)
@@ -84,7 +86,7 @@ def animate_utterance(utterance, args, sinks, render, physics, audio=None) -> in
                     fps=args.fps, audio=args.audio if audio is None else audio, physics=args.physics,
                     physics_settings=physics, checkpoint=lambda motion: opt.checkpoint_of(motion, sinks, args),
                     resume=args.resume, show_progress=not args.quiet,
-                    source=str(getattr(args, "transcript", None) or "text"))
+                    source=str(getattr(args, "transcript", None) or "text"), blink=not args.no_blink)
     if not args.quiet:
         print(pipeline.summary(stats, args.fps))
     return 0

@@ -2,7 +2,7 @@
 (:mod:`~visemeface.face.procedural`).
 
 >>> from visemeface.face import default_face, load_face
->>> face = default_face()              # ~4,500 vertices, metres, origin between the mouth corners
+>>> face = default_face()              # ~5,000 vertices, metres, origin between the mouth corners
 
 The names are loaded on first use, so importing one submodule does not build the other.
 """

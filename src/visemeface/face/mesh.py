@@ -42,6 +42,9 @@ LANDMARK_NAMES = (
     "jaw_joint_left", "jaw_joint_right", "eye_centre_left", "eye_centre_right",
     "cheek_left", "cheek_right", "nasion",
 )
+#: Landmarks of a mouth interior (the default face has them; a user's mesh may): the
+#: incisal edges' centres and the tongue's tip and highest point at rest.
+INTERIOR_LANDMARKS = ("upper_incisor_edge", "lower_incisor_edge", "tongue_tip", "tongue_dorsum")
 
 #: Linear-RGB-ish display colours (0..1) used when a mesh carries none.
 SKIN = np.array([0.86, 0.66, 0.55])

@@ -22,6 +22,8 @@ __all__ = [
     "lip_trim_weights",
     "jaw_centre_weight",
     "jaw_rotation_displacement",
+    "local_displacement",
+    "turn_displacement",
 ]
 
 
@@ -292,3 +294,59 @@ def jaw_rotation_displacement(points: np.ndarray, joint_left, joint_right, angle
     cross = np.cross(kax, r)
     theta = angle * np.asarray(weights, dtype=float)
     return (np.cos(theta) - 1.0)[:, None] * perp + np.sin(theta)[:, None] * cross
+
+
+def local_displacement(points: np.ndarray, centre, radii, direction, mask: np.ndarray,
+                       axes: np.ndarray | None = None, inner: float | None = None) -> np.ndarray:
+    r"""A smooth local push (N, 3) at activation 1: the tongue's and the lip shaping's functions.
+
+    Each vertex in ``mask`` moves along ``direction`` (a vector, m) scaled by a
+    Gaussian of its ellipsoidal distance to ``centre``,
+
+    .. math:: \Delta\mathbf p = \mathbf d\,\exp\Big(-\sum_k \big(q_k / r_k\big)^2\Big),
+              \quad \mathbf q = A(\mathbf p - \mathbf c),
+
+    with per-axis radii ``radii`` (m) along the rows of ``axes`` (a rig's mouth
+    frame; default the world axes); vertices outside ``mask`` stay. With
+    ``inner`` (m) the lateral factor is a *band* instead,
+    :math:`s\big((|q_x| - \text{inner}) / r_x\big)` (``smoothstep``): nothing moves
+    within ``inner`` of the centre, everything beyond ``inner + r_x`` fully, and the
+    x component of ``direction`` points away from the centre line on each side
+    (negative: toward it). Linear in the activation, so a rig precomputes it as a
+    basis field.
+    """
+    points = np.asarray(points, dtype=float)
+    axes = np.eye(3) if axes is None else np.asarray(axes, dtype=float)
+    local = (points - np.asarray(centre, dtype=float)) @ axes.T
+    q = local / np.asarray(radii, dtype=float)
+    d = np.broadcast_to(np.asarray(direction, dtype=float), points.shape).copy()
+    if inner is None:
+        w = np.exp(-(q ** 2).sum(axis=1))
+    else:
+        w = np.exp(-(q[:, 1:] ** 2).sum(axis=1)) * smoothstep(inner, inner + radii[0], np.abs(local[:, 0]))
+        dl = d @ axes.T                                  # direction in the frame, x flipped on the -x side
+        dl[:, 0] *= np.where(local[:, 0] < 0, -1.0, 1.0)
+        d = dl @ axes
+    return (w * np.asarray(mask, dtype=float))[:, None] * d
+
+
+def turn_displacement(points: np.ndarray, centre, axis, angle: float, mask: np.ndarray,
+                      radius: float | None = None, view=(0.0, 0.0, 1.0)) -> np.ndarray:
+    r"""A small rotation (N, 3) of the vertices in ``mask`` about ``axis`` through ``centre``, linearised:
+
+    .. math:: \Delta\mathbf p = w\,\theta\,\mathbf k \times (\mathbf p - \mathbf c),
+
+    exact to first order in :math:`\theta`. With ``radius`` only the part within
+    ``radius`` of the line through ``centre`` along ``view`` turns (:math:`w` falls
+    from 1 at 0.7 ``radius`` to 0 at ``radius``): the iris slides over the sclera,
+    and the eyeball's wide sides stay under the lids.
+    """
+    points = np.asarray(points, dtype=float)
+    k = _unit(axis)
+    r = points - np.asarray(centre, dtype=float)
+    w = np.asarray(mask, dtype=float)
+    if radius is not None:
+        v = _unit(view)
+        d = np.linalg.norm(r - np.outer(r @ v, v), axis=1)
+        w = w * smoothstep(radius, 0.7 * radius, d)
+    return float(angle) * np.cross(k, r) * w[:, None]

@@ -21,7 +21,7 @@ import numpy as np
 
 from visemeface.errors import InputError
 
-__all__ = ["LipGauge", "lip_dimensions", "lip_changes", "TARGET_DIMENSIONS"]
+__all__ = ["LipGauge", "lip_dimensions", "lip_changes", "inner_opening", "TARGET_DIMENSIONS"]
 
 #: Dimensions of the viseme target table (``data/visemes/targets.csv``).
 TARGET_DIMENSIONS = ("mouth_width", "opening_height", "protrusion", "upper_lip_raise",
@@ -136,3 +136,33 @@ def lip_changes(face, vertices: np.ndarray) -> dict:
     is a fifth of its rest width narrower.
     """
     return LipGauge(face).changes(vertices)
+
+
+def inner_opening(face, vertices: np.ndarray, tolerance: float = 2e-4) -> dict:
+    """The inner opening between the lips: its ``width``, ``height`` (m) and ``aspect`` (width/height).
+
+    The upper and lower seams are paired column by column (both regions are
+    sorted by x on a quad-structured face with one lower copy per upper seam
+    vertex); the height is the largest vertical gap, the width the lateral
+    extent (mouth frame) of the columns whose gap exceeds ``tolerance``,
+    extended linearly to where the gap closes. ``aspect`` is inf for a closed
+    mouth.
+    """
+    from visemeface.muscles.rig import mouth_frame
+
+    frame = mouth_frame(face)
+    up, lo = face.region("lip_seam_upper"), face.region("lip_seam_lower")
+    if len(up) != len(lo):
+        raise InputError("the lip seams have different lengths: cannot pair them column by column")
+    p_up = frame.to_local(np.asarray(vertices, dtype=float)[up])
+    p_lo = frame.to_local(np.asarray(vertices, dtype=float)[lo])
+    x = 0.5 * (p_up[:, 0] + p_lo[:, 0])
+    gap = p_up[:, 1] - p_lo[:, 1] - tolerance
+    open_ = np.flatnonzero(gap > 0)
+    if len(open_) == 0:
+        return {"width": 0.0, "height": 0.0, "aspect": float("inf")}
+    i0, i1 = open_[0], open_[-1]
+    left = x[i0] if i0 == 0 else x[i0 - 1] + (x[i0] - x[i0 - 1]) * (-gap[i0 - 1]) / (gap[i0] - gap[i0 - 1])
+    right = x[i1] if i1 == len(x) - 1 else x[i1] + (x[i1 + 1] - x[i1]) * gap[i1] / (gap[i1] - gap[i1 + 1])
+    width, height = float(right - left), float(gap.max() + tolerance)
+    return {"width": width, "height": height, "aspect": width / height}

@@ -31,7 +31,16 @@ def tinted_face(face, magnitude: np.ndarray, scale: float | None = None):
 
 
 def muscle_outline(muscle, frame, n: int = 48) -> list[np.ndarray]:
-    """3-D polylines outlining a muscle's zone: cone edges (linear) or the ellipse (sphincter)."""
+    """3-D polylines outlining a muscle's zone: cone edges (linear), the ellipse (sphincter), or the
+    ellipse of a local function's radii / a turning part's radius (tongue, lips, lids, gaze)."""
+    if muscle.kind in ("local", "turn"):
+        t = np.linspace(0, 2 * np.pi, n)
+        ex, ey = frame.axes[0], frame.axes[1]
+        if muscle.kind == "local":
+            rx, ry = muscle.radii[0], muscle.radii[1]
+        else:
+            rx = ry = muscle.inner if muscle.inner is not None else 0.1 * frame.width
+        return [muscle.centre + np.outer(rx * np.cos(t), ex) + np.outer(ry * np.sin(t), ey)]
     if muscle.kind == "sphincter":
         t = np.linspace(0, 2 * np.pi, n)
         ex, ey = frame.axes[0], frame.axes[1]

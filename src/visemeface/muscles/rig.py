@@ -1,4 +1,4 @@
-"""The Waters muscle rig: 25 muscles and the jaw placed on any face mesh.
+"""The Waters muscle rig: 25 muscles, the tongue's, lips', lids' and eyes' functions and the jaw on any face mesh.
 
 A rig file (TOML, ``data/rig/default.toml``) places every muscle relative to
 the face's landmarks, in a *mouth frame* measured on the mesh: origin the
@@ -20,7 +20,11 @@ muscle's range (seed 002 §2.1.3) with a warning naming the muscles.
 Rig file format
 ---------------
 ``[trim]`` (lip-trim surface), ``[defaults]`` (``exclude``: regions no muscle
-moves), ``[jaw]`` and one ``[[muscle]]`` table per muscle or left/right pair.
+moves), ``[jaw]`` (``rigid``: regions that turn with the mandible, weight 1) and one
+``[[muscle]]`` table per function or left/right pair: ``kind`` "linear" or
+"sphincter" (Waters), "local" (a Gaussian push on some regions: tongue, lip
+shaping, lids; :func:`~visemeface.muscles.functions.local_displacement`) or "turn"
+(a linearised rotation: gaze). The file is read by :mod:`visemeface.muscles.rigfile`.
 A point is ``{at = "landmark", offset = [x, y, z]}`` or
 ``{mix = {landmark = weight, ...}, offset = [...]}`` with the offset in mouth
 widths along the mouth frame. In a pair (``sides = ["left", "right"]``) the
@@ -31,8 +35,6 @@ written for the left side (+x = outward); the right side mirrors them.
 from __future__ import annotations
 
 import functools
-import re
-import tomllib
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -43,6 +45,7 @@ import numpy as np
 from visemeface.errors import InputError, close_matches
 from visemeface.muscles import functions as mf
 from visemeface.resources import data_path
+from visemeface.muscles.rigfile import CONVENTION_REGIONS, LIP_SIDES, _RigFileReader, muscles_from  # noqa: F401
 
 __all__ = ["Muscle", "MouthFrame", "MuscleRig", "default_rig", "mouth_frame", "SPEECH_FUNCTIONS"]
 
@@ -57,11 +60,6 @@ SPEECH_FUNCTIONS = (
     "jaw",
 )
 
-LIP_SIDES = ("upper", "lower", "both")
-
-#: Region names of docs/conventions.md (a rig file may name them even if a mesh lacks some).
-CONVENTION_REGIONS = ("upper_lip", "lower_lip", "lip_seam_upper", "lip_seam_lower", "jaw", "fixed", "brow",
-                      "cheek", "mouth_cavity", "eyes")
 
 
 @dataclass(frozen=True)
@@ -101,7 +99,7 @@ class Muscle:
     """One muscle placed on a face (positions in metres, angles in radians)."""
 
     name: str
-    kind: str  # "linear" | "sphincter"
+    kind: str  # "linear" | "sphincter" | "local" | "turn"
     side: str  # "left" | "right" | "centre"
     lip: str  # "upper" | "lower" | "both"
     range: tuple
@@ -120,195 +118,36 @@ class Muscle:
     exclude: tuple = ()
     description: str = ""
     params: dict = field(default_factory=dict)
+    radii: np.ndarray | None = None        # "local": Gaussian radii (m) per axis
+    direction: np.ndarray | None = None    # "local": displacement (m) at the centre at activation 1
+    mask: np.ndarray | None = None         # "local": (N,) bool, the vertices it may move
+    symmetric: bool = False                # "local": plus its mirror image about the mouth's mid-plane
+    direction_lower: np.ndarray | None = None   # "local": the lower lip's direction (lip-trimmed), if any
+    inner: float | None = None             # "local": a lateral band from this distance (m) instead of a Gaussian
+    axis: np.ndarray | None = None         # "turn": rotation axis (world), angle in ``k`` (radians at 1);
+    #                                        ``inner`` is then the radius of the part that turns (m)
 
-    def field(self, points: np.ndarray, frame: MouthFrame) -> np.ndarray:
-        """Untrimmed displacement (N, 3) at activation 1."""
+    def field(self, points: np.ndarray, frame: MouthFrame, direction: np.ndarray | None = None) -> np.ndarray:
+        """Untrimmed displacement (N, 3) at activation 1 (a local function's ``direction`` may be replaced)."""
+        if self.kind == "turn":
+            return mf.turn_displacement(points, self.centre, self.axis, self.k, self.mask, self.inner,
+                                        frame.axes[2])
+        if self.kind == "local":
+            if self.mask is None or not self.mask.any():
+                return np.zeros_like(np.asarray(points, dtype=float))
+            d = self.direction if direction is None else direction
+            out = mf.local_displacement(points, self.centre, self.radii, d, self.mask, frame.axes, self.inner)
+            if self.symmetric:
+                ex = frame.axes[0]
+                c = self.centre - 2 * ((self.centre - frame.origin) @ ex) * ex
+                out = out + mf.local_displacement(points, c, self.radii, d - 2 * (d @ ex) * ex, self.mask,
+                                                  frame.axes)
+            return out
         if self.kind == "linear":
             return mf.linear_muscle_displacement(points, self.attachment, self.insertion, self.zone_angle,
                                                  self.falloff_start, self.falloff_end, self.k)
         return mf.sphincter_displacement(points, self.centre, frame.axes[0], frame.axes[1], self.semi_x,
                                          self.semi_y, self.k, self.protrusion, self.depth, self.shield)
-
-
-class _RigFileReader:
-    """Parses and validates a rig TOML; every error names file, entry and field."""
-
-    def __init__(self, path: Path, face, frame: MouthFrame):
-        self.path = path
-        self.face = face
-        self.frame = frame
-        try:
-            self.text = path.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise InputError(f"cannot read rig file: {exc.strerror}", path) from None
-        except UnicodeDecodeError:
-            raise InputError("not a rig file: not UTF-8 text", path) from None
-        try:
-            self.data = tomllib.loads(self.text)
-        except tomllib.TOMLDecodeError as exc:
-            line = getattr(exc, "lineno", None)
-            raise InputError(f"not valid TOML: {getattr(exc, 'msg', exc)}", path, line) from None
-
-    def line_of(self, name: str) -> int | None:
-        m = re.search(r'^\s*name\s*=\s*"' + re.escape(name) + '"', self.text, re.M)
-        return self.text.count("\n", 0, m.start()) + 1 if m else None
-
-    def error(self, entry: str, fld: str, message: str):
-        return InputError(f"entry {entry!r}, field {fld!r}: {message}", self.path, self.line_of(entry))
-
-    def get(self, table: Mapping, entry: str, fld: str, kind=float, default=...):
-        if fld not in table:
-            if default is ...:
-                raise self.error(entry, fld, "missing")
-            return default
-        value = table[fld]
-        if kind is float:
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
-                raise self.error(entry, fld, f"expected a finite number, got {value!r}")
-            return float(value)
-        if kind is str:
-            if not isinstance(value, str):
-                raise self.error(entry, fld, f"expected text, got {value!r}")
-            return value
-        if kind == "range":
-            if (not isinstance(value, list) or len(value) != 2
-                    or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in value)
-                    or not value[0] < value[1]):
-                raise self.error(entry, fld, f"expected [low, high] with low < high, got {value!r}")
-            return (float(value[0]), float(value[1]))
-        if kind == "regions":
-            if not isinstance(value, list) or not all(isinstance(x, str) for x in value):
-                raise self.error(entry, fld, f"expected a list of region names, got {value!r}")
-            return tuple(value)
-        raise AssertionError(kind)
-
-    def regions(self, names, entry: str, fld: str) -> tuple:
-        """The region names the face has; a name neither on the face nor in the
-        conventions' list is an error (a typo), a conventional one the face lacks
-        (a user's mesh without ``eyes``) is skipped."""
-        kept = []
-        for region in names:
-            if region in self.face.regions:
-                kept.append(region)
-            elif region not in CONVENTION_REGIONS:
-                raise self.error(entry, fld, f"unknown region {region!r}"
-                                 + close_matches(region, set(self.face.regions) | set(CONVENTION_REGIONS)))
-        return tuple(kept)
-
-    def landmark(self, entry: str, fld: str, name: str) -> np.ndarray:
-        if name not in self.face.landmarks:
-            raise self.error(entry, fld, f"unknown landmark {name!r}" + close_matches(name, self.face.landmarks))
-        return self.face.landmark_position(name)
-
-    def point(self, table: Mapping, entry: str, fld: str, side: str) -> np.ndarray:
-        spec = table.get(fld)
-        if not isinstance(spec, Mapping):
-            raise self.error(entry, fld, "missing" if spec is None else
-                             f"expected {{at = \"landmark\", offset = [x, y, z]}}, got {spec!r}")
-        sub = side if side in ("left", "right") else ""
-
-        def name_of(n):
-            if "{side}" in n and not sub:
-                raise self.error(entry, fld, f"landmark {n!r} uses {{side}} but the muscle has no sides")
-            return n.replace("{side}", sub)
-
-        if "at" in spec and "mix" not in spec:
-            if not isinstance(spec["at"], str):
-                raise self.error(entry, fld, f"'at' must be a landmark name, got {spec['at']!r}")
-            base = self.landmark(entry, fld, name_of(spec["at"]))
-        elif "mix" in spec and "at" not in spec:
-            mix = spec["mix"]
-            if not isinstance(mix, Mapping) or not mix:
-                raise self.error(entry, fld, f"'mix' must map landmarks to weights, got {mix!r}")
-            total, base = 0.0, np.zeros(3)
-            for n, w in mix.items():
-                if isinstance(w, bool) or not isinstance(w, (int, float)) or not np.isfinite(w):
-                    raise self.error(entry, fld, f"weight of {n!r} must be a number, got {w!r}")
-                base = base + float(w) * self.landmark(entry, fld, name_of(n))
-                total += float(w)
-            if abs(total) < 1e-12:
-                raise self.error(entry, fld, "mix weights sum to zero")
-            base = base / total
-        else:
-            raise self.error(entry, fld, "give exactly one of 'at' or 'mix'")
-        offset = spec.get("offset", [0.0, 0.0, 0.0])
-        if (not isinstance(offset, list) or len(offset) != 3
-                or not all(isinstance(x, (int, float)) and not isinstance(x, bool) and np.isfinite(x)
-                           for x in offset)):
-            raise self.error(entry, fld, f"offset must be [x, y, z] in mouth widths, got {offset!r}")
-        offset = np.array(offset, dtype=float)
-        if side == "right":
-            offset[0] = -offset[0]
-        return base + self.frame.to_world(offset)
-
-
-def _muscles_from(reader: _RigFileReader) -> list[Muscle]:
-    data = reader.data
-    entries = data.get("muscle")
-    if not isinstance(entries, list) or not entries:
-        raise InputError("no [[muscle]] entries", reader.path)
-    default_exclude = reader.get(data.get("defaults", {}), "defaults", "exclude", "regions", ())
-    W = reader.frame.width
-    muscles: list[Muscle] = []
-    for i, table in enumerate(entries):
-        base = table.get("name") if isinstance(table.get("name"), str) else f"muscle #{i + 1}"
-        if not isinstance(table.get("name"), str):
-            raise reader.error(base, "name", "missing")
-        kind = reader.get(table, base, "kind", str)
-        if kind not in ("linear", "sphincter"):
-            raise reader.error(base, "kind", f"expected 'linear' or 'sphincter', got {kind!r}")
-        lip = reader.get(table, base, "lip", str)
-        if lip not in LIP_SIDES:
-            raise reader.error(base, "lip", f"expected one of {', '.join(LIP_SIDES)}, got {lip!r}")
-        rng = reader.get(table, base, "range", "range")
-        sides = table.get("sides", [])
-        if sides not in ([], ["left", "right"]):
-            raise reader.error(base, "sides", f'expected ["left", "right"] or nothing, got {sides!r}')
-        exclude = reader.regions(default_exclude + reader.get(table, base, "exclude", "regions", ()),
-                                 base, "exclude")
-        for side in sides or ["centre"]:
-            name = f"{base}_{side}" if sides else base
-            m = Muscle(name=name, kind=kind, side=side, lip=lip, range=rng, exclude=exclude,
-                       description=str(table.get("description", "")), params=dict(table))
-            if kind == "linear":
-                m.k = reader.get(table, base, "k", float) * W
-                m.attachment = reader.point(table, base, "attachment", side)
-                m.insertion = reader.point(table, base, "insertion", side)
-                length = float(np.linalg.norm(m.insertion - m.attachment))
-                if length <= 0:
-                    raise reader.error(base, "insertion", "insertion coincides with the attachment")
-                omega = reader.get(table, base, "zone_angle_deg", float)
-                if not 0 < omega < 180:
-                    raise reader.error(base, "zone_angle_deg", f"must be in (0, 180), got {omega}")
-                m.zone_angle = np.radians(omega)
-                rs = reader.get(table, base, "falloff_start", float)
-                rf = reader.get(table, base, "falloff_end", float)
-                if not 0 < rs < rf:
-                    raise reader.error(base, "falloff_end", f"need 0 < falloff_start < falloff_end, got {rs}, {rf}")
-                m.falloff_start, m.falloff_end = rs * length, rf * length
-            else:
-                m.centre = reader.point(table, base, "centre", side)
-                sx = reader.get(table, base, "semi_x", float)
-                sy = reader.get(table, base, "semi_y", float)
-                if not 0 < sy <= sx:
-                    raise reader.error(base, "semi_y", f"need 0 < semi_y <= semi_x, got {sx}, {sy}")
-                m.semi_x, m.semi_y = sx * W, sy * W
-                m.k = reader.get(table, base, "k", float)
-                if not 0 <= m.k < 1:
-                    raise reader.error(base, "k", f"a sphincter's contraction fraction must be in [0, 1), got {m.k}")
-                shield = reader.get(table, base, "shield", float, None)
-                m.shield = None if shield is None else shield * W
-                m.protrusion = reader.get(table, base, "protrusion", float, 0.0) * W
-                depth = reader.get(table, base, "depth", float, None)
-                m.depth = None if depth is None else depth * W
-            muscles.append(m)
-    names = [m.name for m in muscles]
-    dup = sorted({n for n in names if names.count(n) > 1})
-    if dup:
-        raise reader.error(dup[0], "name", "defined twice")
-    if "jaw" in names:
-        raise reader.error("jaw", "name", "'jaw' is reserved for the [jaw] table")
-    return muscles
 
 
 class MuscleRig:
@@ -341,6 +180,9 @@ class MuscleRig:
         bases = np.zeros((len(muscles), len(rest), 3))
         for i, m in enumerate(muscles):
             b = m.field(rest, frame)
+            if m.kind == "local" and m.direction_lower is not None:
+                # one function moving the two lips differently (rounding: the lips' sides meet)
+                b = b * self.upper_weight[:, None] + m.field(rest, frame, m.direction_lower) * lower[:, None]
             if m.lip == "upper":
                 b *= self.upper_weight[:, None]
             elif m.lip == "lower":
@@ -354,6 +196,8 @@ class MuscleRig:
         jaw_trim = dict(trim, corner_start=jaw["corner_start"], corner_end=jaw["corner_end"])
         jaw_lower = 1.0 - self._trim_weights(face, frame, local, u, jaw_trim, tag=jaw["tag"])
         jw = mf.jaw_centre_weight(u, jaw["reach"]) * jaw_lower
+        for region in jaw.get("rigid", ()):
+            jw[face.regions[region]] = 1.0      # lower teeth, gum and tongue turn with the mandible
         for region in jaw["exclude"]:
             jw[face.regions[region]] = 0.0
         self.jaw_weight = jw
@@ -436,7 +280,7 @@ class MuscleRig:
                                  "landmarks)", getattr(face, "landmarks_file", None) or "the face")
         frame = mouth_frame(face)
         reader = _RigFileReader(path, face, frame)
-        muscles = _muscles_from(reader)
+        muscles = muscles_from(reader)
         t = reader.data.get("trim", {})
         trim = {f: reader.get(t, "trim", f, float) for f in
                 ("inner_width", "outer_width", "corner_start", "corner_end", "smooth")}
@@ -468,6 +312,7 @@ class MuscleRig:
         if not 0 <= jaw["corner_start"] < jaw["corner_end"]:
             raise reader.error("jaw", "corner_end", "need 0 <= corner_start < corner_end")
         jaw["exclude"] = reader.regions(jaw["exclude"], "jaw", "exclude")
+        jaw["rigid"] = reader.regions(reader.get(j, "jaw", "rigid", "regions", ()), "jaw", "rigid")
         if jaw["reach"] <= 0:
             raise reader.error("jaw", "reach", f"must be positive, got {jaw['reach']}")
         return cls(face, muscles, jaw, trim, frame, path)
@@ -532,7 +377,11 @@ class MuscleRig:
     def pose(self, a) -> np.ndarray:
         """Posed vertices (N, 3): rest + :meth:`displacement`. ``a``: mapping or vector in ``names`` order."""
         a = self._vector(a)
-        return (self._rest_flat + self._coefficients(a) @ self._matrix).reshape(-1, 3)
+        c = self._coefficients(a)
+        # only the functions in use: a pose uses a third of the rig's 40-odd rows, and a small
+        # product stays on one thread (a multithreaded BLAS call costs 1-10 ms on a busy machine)
+        used = np.flatnonzero(c)
+        return (self._rest_flat + c[used] @ self._matrix[used]).reshape(-1, 3)
 
     def track_matrix(self, track) -> np.ndarray:
         """An ActivationTrack (DataFrame, columns = rig functions) as (F, M+1) floats in ``names`` order.
