@@ -105,7 +105,8 @@ def test_weight_files_parse_back(exported):
     assert (oc.iloc[:, 2:].sum(axis=1) - 1).abs().max() < 5e-3
     vrm = pd.read_csv(exported / "v.csv")
     assert {"aa", "ih", "ou", "ee", "oh", "blink", "happy", "surprised"} <= set(vrm.columns)
-    assert vrm["blink"].eq(0).all() and vrm[["aa", "oh", "ou"]].to_numpy().max() > 0.3
+    assert vrm["blink"].between(0, 1).all() and (vrm["blink"] < 0.05).mean() > 0.8   # blinks are brief
+    assert vrm[["aa", "oh", "ou"]].to_numpy().max() > 0.3
 
 
 def test_rhubarb_json_of_a_run(exported):

@@ -39,8 +39,15 @@ SUM_WEIGHT = 1e3
 
 
 def moving_vertices(rig) -> np.ndarray:
-    """Boolean mask (N,) of the vertices any rig function moves (where residuals are measured)."""
-    return (np.abs(rig.bases).sum(axis=(0, 2)) > 0) | (np.asarray(rig.jaw_weight) > 0)
+    """Boolean mask (N,) of the face-surface vertices any rig function moves (where residuals are measured).
+
+    The mouth's interior (the ``mouth_cavity`` region: teeth, gums, tongue, cavity walls) is left out: the
+    clients' vocabularies describe the face's surface (ARKit's one tongue shape, tongueOut, cannot hold the
+    tongue's speech positions), and fitting the tongue would bend the lip weights to explain it.
+    """
+    moving = (np.abs(rig.bases).sum(axis=(0, 2)) > 0) | (np.asarray(rig.jaw_weight) > 0)
+    moving[rig.face.regions.get("mouth_cavity", np.empty(0, np.int64))] = False
+    return moving
 
 
 class ShapeFit:
