@@ -12,11 +12,14 @@ Figures
 -------
 counts      FEM nodes / hexahedra, saliva slabs across the mouth
 zipper      glue 0.08 vs elastic vs glue 0 (jaw ramp 0.35): where the first opening is
-            (slab s, mouth widths from the centre), distinct open widths, time from the first
+            (slab s, mouth widths from the centre), distinct open widths (mesh and rendered video,
+            seed 001's analysis; picture docs/images/sticky_zipper.png), time from the first
             opening to full width, elastic's share of full width within 2 frames, the power-law
             exponent of the centre opening height over the first opening; glue 0 == elastic
 merge       central glue 0.18 (seed 001): frames with two openings, then one
 glue03      glue 0.3: do the lips part fully at full jaw, and later than glue 0.08?
+speech      "Bob moves five boats" and "set white with p two soon", sticky and elastic at 30 and 60 fps:
+            completed (no divergence)? per /p b m/ release: first opening place, frames to 90 % width
 calibration per viseme without glue: RMS lip distance FEM end state vs kinematic posture (target <= 5 %)
 equilibrium sticky vs elastic once open wide: RMS lip difference (mouth widths)
 """
@@ -27,12 +30,16 @@ import argparse
 import json
 import time
 
+from pathlib import Path
+
 import numpy as np
 
 from visemeface.face.procedural import default_face
 from visemeface.muscles.rig import MuscleRig
 from visemeface.physics import drive
 from visemeface.physics.face_model import build_fem_face
+
+IMAGES = Path(__file__).resolve().parents[1] / "docs" / "images"
 
 
 def emit(**kw):
@@ -45,7 +52,7 @@ def run(fem, rig, track, physics="sticky", **settings):
     try:
         for fr in sim.frames():
             op = sim.film.front_gaps(fr.displacement) - sim.film.rest_gap
-            out.append({"i": fr.index, "t": fr.time, "v": fr.vertices, "gap": op / fem.mouth_width,
+            out.append({"i": fr.index, "t": fr.time, "v": fr.vertices, "d": fr.display, "gap": op / fem.mouth_width,
                         "broken": sim.broken.copy(), **fr.saliva})
     except Exception as e:                           # a diverged run is a figure too
         emit(figure="diverged", physics=physics, settings=str(settings), error=f"{type(e).__name__}: {str(e)[:200]}")
@@ -77,6 +84,32 @@ def zipper_measures(sim, frames, fps):
             "spans": np.round(spans[k0:k_full + 1], 3)}
 
 
+def video_zipper(fem, runs, fps):
+    """Seed-001 analysis of rendered frames (``visemeface analyze``'s profile) and a picture strip."""
+    from visemeface.analysis.profiles import analyze_frames
+    from visemeface.render.export import write_png
+    from visemeface.render.renderer import Renderer
+    r = Renderer(fem.face, size=(512, 512), view="mouth")
+    strips = []
+    for name in ("sticky", "elastic"):
+        frames = runs[name][1]
+        imgs = [r.render(f["d"]) for f in frames]
+        prof = analyze_frames(imgs, r.mouth_box(), fps)
+        vw = prof["width"].to_numpy()
+        opened = np.flatnonzero(vw > 0)
+        first = int(opened[0]) if len(opened) else None
+        full = int(np.flatnonzero(vw >= 0.9 * vw.max())[0]) if len(opened) else None
+        emit(figure="zipper_video", run=name, width=np.round(vw, 3), count=prof["count"].to_numpy(),
+             first_open_frame=first, frames_to_90pct=None if first is None else full - first + 1,
+             distinct_widths=int(len(np.unique(np.round(vw[vw > 0], 3)))))
+        k = first if first is not None else len(imgs) // 2
+        pick = list(range(max(k - 2, 0), min(k + 5, len(imgs))))
+        strips.append(np.concatenate([imgs[i][140:372] for i in pick], axis=1))
+    w = min(x.shape[1] for x in strips)
+    IMAGES.mkdir(parents=True, exist_ok=True)
+    write_png(IMAGES / "sticky_zipper.png", np.concatenate([x[:, :w] for x in strips], axis=0)[::2, ::2].copy())
+
+
 def fig_zipper(fem, rig, fps, common):
     tr = drive.ramp_track(rig.names, fps, 0.02, 0.25, 0.08, 0.35)
     runs = {}
@@ -90,6 +123,8 @@ def fig_zipper(fem, rig, fps, common):
     a, b = runs["glue0"][1], runs["elastic"][1]
     if a and b:
         emit(figure="zipper_glue0_vs_elastic", max_diff_m=float(max(np.abs(x["v"] - y["v"]).max() for x, y in zip(a, b))))
+    if runs["sticky"][1] and runs["elastic"][1]:
+        video_zipper(fem, runs, fps)
     return runs
 
 
@@ -144,6 +179,47 @@ def fig_calibration(fem, rig, common, visemes=None):
              max=round(float(np.max(errs)), 4), within_5pct=int(np.sum(np.array(errs) <= 0.05)))
 
 
+SPEECH = {"bob": "Bob moves five boats", "set_white": "set white with p two soon"}
+
+
+def speech_track(rig, which: str, fps: float):
+    from visemeface.postures.library import load_visemes
+    from visemeface.resources import transcripts_path
+    from visemeface.speech.g2p import text_to_segments
+    from visemeface.speech.timeline import activation_track
+    from visemeface.speech.transcripts import read_transcript
+    src = SPEECH[which]
+    segs = read_transcript(transcripts_path(src)) if src.endswith(".txt") else text_to_segments(src)
+    ranges = {n: tuple(r) for n, r in zip(rig.names, rig.ranges)}
+    return segs, activation_track(segs, load_visemes(rig=rig), fps=fps, ranges=ranges)
+
+
+def fig_speech(fem, rig, common, fps_list=(30.0, 60.0)):
+    """Each sentence sticky and elastic at each fps: completes? each bilabial release: where and how long."""
+    for which in SPEECH:
+        for fps in fps_list:
+            segs, track = speech_track(rig, which, fps)
+            for physics in ("sticky", "elastic"):
+                t0 = time.perf_counter()
+                sim, frames = run(fem, rig, track, physics, **common)
+                releases = []
+                for _, seg in segs[segs["phoneme"].isin(["p", "b", "m"])].iterrows():
+                    k0 = int(np.floor(seg["end"] * fps))
+                    win = frames[k0:k0 + int(0.3 * fps)]
+                    spans = np.array([f["film_open_span"] for f in win])
+                    if not len(spans) or spans.max() <= 0:
+                        releases.append({"phoneme": seg["phoneme"], "t": round(float(seg["end"]), 3), "opens": False})
+                        continue
+                    a = int(np.flatnonzero(spans > 0)[0])
+                    b = int(np.flatnonzero(spans >= 0.9 * spans.max())[0])
+                    where = float(abs(sim.film.s[int(np.argmax(win[a]["gap"]))]))
+                    releases.append({"phoneme": seg["phoneme"], "t": round(float(seg["end"]), 3), "opens": True,
+                                     "first_open_abs_s": round(where, 3), "frames_to_90pct": b - a + 1,
+                                     "openings_at_first": int(win[a]["film_open_count"])})
+                emit(figure="speech", sentence=which, fps=fps, physics=physics, completed=len(frames) == len(track),
+                     frames=len(frames), wall_s=round(time.perf_counter() - t0, 1), releases=releases)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--resolution", type=int, default=None, help="face resolution (default: the default face)")
@@ -170,6 +246,8 @@ def main():
         fig_equilibrium(fem, runs)
     if "calibration" in only:
         fig_calibration(fem, rig, common, args.visemes.split(",") if args.visemes else None)
+    if "speech" in only:
+        fig_speech(fem, rig, common)
     if "merge" in only:
         fig_merge(fem, rig, args.fps, common)
     if "glue03" in only:

@@ -101,6 +101,17 @@ class SalivaFilm:
         self.modulus = SALIVA.p_wave_modulus
         self._Z0 = self.breaking_points(0.0)
         self.rest_gap = self.front_gaps(np.zeros((len(nodes), 3)))
+        self._compile()
+
+    def _compile(self) -> None:
+        """Compile (or load) the rule now, on zero slabs: not inside the first step, where an
+        interrupt would land in numba's compiler."""
+        st = {k: v[:0] for k, v in self.initial_state().items()}
+        z = np.zeros((1, 3))
+        p = self.params
+        _film_step(z, z.copy(), self.n0[:0], self.n1[:0], self.w[:0], self.cgrads[:0], self.grads[:0],
+                   self.volumes[:0], self.axis[:0], self._Z0[:0], st["broken"], st["dry"], st["stored"],
+                   st["stretch"], p.decay, p.rebond_strain, p.squeeze, self.modulus, FILM_STIFF_STRETCH)
 
     @property
     def n_elements(self) -> int:

@@ -244,6 +244,10 @@ class StickySimulation:
             first = int(start["frame"]) + 1
             if self.state.step != (first - 1) * spf or self.state.dt != self.dt:
                 raise InputError("the checkpoint's step does not match its frame")
+        # One step on a copy compiles (or loads) every kernel before the first frame, so an
+        # interrupt never lands in numba's compiler; the step's caches are pure functions of time.
+        self.integrator.step(self.state.copy())
+        if start is not None:
             self.integrator.advance(self.state, spf)
         for k in range(first, self.n_frames):
             if k > first:
