@@ -227,6 +227,8 @@ def main():
     ap.add_argument("--only", default="counts,zipper,equilibrium,merge,glue03")
     ap.add_argument("--lip-bone", choices=("free", "muscle"), default="muscle")
     ap.add_argument("--muscles", choices=("active", "loads"), default="active")
+    ap.add_argument("--soften", type=float, default=0.0,
+                    help="cohesive softening stretch of a broken film (0: the seed's 0.99-a-step decay)")
     ap.add_argument("--posture-hz", type=float, default=0.0, help="uniform posture spring (Hz, 0 = none)")
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--visemes", default=None, help="calibration: comma-separated DECtalk symbols (default all)")
@@ -236,8 +238,12 @@ def main():
     face = default_face(resolution=args.resolution)
     fem, rig = build_fem_face(face), MuscleRig.from_file(face)
     only = set(args.only.split(","))
+    from visemeface.physics.saliva import SalivaParams
     common = {"lip_bone": args.lip_bone, "posture_hz": args.posture_hz, "muscles": args.muscles}
-    emit(figure="settings", resolution=args.resolution, fps=args.fps, **common)
+    if args.soften:
+        common["saliva"] = SalivaParams(soften=args.soften)
+    emit(figure="settings", resolution=args.resolution, fps=args.fps, soften=args.soften,
+         **{k: v for k, v in common.items() if k != "saliva"})
     if "counts" in only:
         sim = drive.StickySimulation(fem, rig, drive.ramp_track(rig.names, args.fps, 0.0, 0.02, 0.0, 0.1))
         emit(figure="counts", **fem.counts(), film_slabs_across=len(np.unique(np.round(sim.film.s, 9))))

@@ -33,9 +33,13 @@ def reference_step(film, u, t: float, state: dict) -> np.ndarray:
     broken &= ~((Q <= 1.0) & (strain <= p.rebond_strain) & ~squeezed)
     newly = ~broken & (Q >= Z) & ~squeezed
     stored[newly] = pull[newly]
-    stored[broken & ~squeezed] *= p.decay
+    if p.soften > 0:                                   # cohesive softening with the stretch
+        fac = np.clip(1.0 - (np.sqrt(np.minimum(Q, 1e30)) - np.sqrt(Z)) / p.soften, 0.0, 1.0)
+    else:
+        stored[broken & ~squeezed] *= p.decay
+        fac = np.ones(len(Q))
     out = pull + push
-    out[broken] = stored[broken] + push[broken]
+    out[broken] = stored[broken] * fac[broken, None, None] + push[broken]
     broken |= newly | squeezed
     dry |= squeezed
     stored[squeezed] = 0.0

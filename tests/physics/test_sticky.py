@@ -269,11 +269,11 @@ def test_glue_file_layouts(tmp_path):
         sv.read_glue_file(p, np.zeros(3))
 
 
-@pytest.mark.parametrize("refine", [1, 4])
-def test_compiled_film_follows_the_numpy_reference(refine):
+@pytest.mark.parametrize("refine,soften", [(1, 0.0), (4, 0.0), (4, 0.05)])
+def test_compiled_film_follows_the_numpy_reference(refine, soften):
     from film_reference import reference_step
     rng = np.random.default_rng(0)
-    params = sv.SalivaParams(squeeze=0.25)
+    params = sv.SalivaParams(squeeze=0.25, soften=soften)
     a, X, sa = _films([0.0, 0.08, 0.3], params, n=3, refine_to=3 * refine)
     b, _, sb = _films([0.0, 0.08, 0.3], params, n=3, refine_to=3 * refine)
     assert a.n_elements == 3 * refine

@@ -111,7 +111,7 @@ class SalivaFilm:
         p = self.params
         _film_step(z, z.copy(), self.n0[:0], self.n1[:0], self.w[:0], self.cgrads[:0], self.grads[:0],
                    self.volumes[:0], self.axis[:0], self._Z0[:0], st["broken"], st["dry"], st["stored"],
-                   st["stretch"], p.decay, p.rebond_strain, p.squeeze, self.modulus, FILM_STIFF_STRETCH)
+                   st["stretch"], p.decay, p.rebond_strain, p.squeeze, self.modulus, FILM_STIFF_STRETCH, p.soften)
 
     @property
     def n_elements(self) -> int:
@@ -154,7 +154,7 @@ class SalivaFilm:
         Z = self._Z0 if p.evaporation == 0.0 else self.breaking_points(t)
         _film_step(u, R, self.n0, self.n1, self.w, self.cgrads, self.grads, self.volumes, self.axis, Z,
                    state["broken"], state["dry"], state["stored"], state["stretch"], p.decay,
-                   p.rebond_strain, p.squeeze, self.modulus, FILM_STIFF_STRETCH)
+                   p.rebond_strain, p.squeeze, self.modulus, FILM_STIFF_STRETCH, p.soften)
 
 
 from numba import njit  # noqa: E402
@@ -162,7 +162,7 @@ from numba import njit  # noqa: E402
 
 @njit(cache=True)
 def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, stored, stretch, decay, rebond,
-               squeeze, modulus, lc):  # pragma: no cover - compiled
+               squeeze, modulus, lc, soften):  # pragma: no cover - compiled
     """One step of every slab: the film's force law and breaking rule; R -= its nodal forces.
 
     Per slab (nodes interpolated from the tissue, see the module docstring):
@@ -246,10 +246,14 @@ def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, st
             if strain <= rebond:
                 broken[k] = False                  # lips back together: re-bond
         if broken[k]:
+            fac = 1.0
+            if soften > 0.0:                       # cohesive softening with the film's stretch
+                fac = min(max(1.0 - (np.sqrt(min(Q, 1e30)) - np.sqrt(Z[k])) / soften, 0.0), 1.0)
             for a in range(8):
                 for i in range(3):
-                    stored[k, a, i] *= decay
-                    pull[a, i] = stored[k, a, i]   # the decaying pull, and contact
+                    if soften <= 0.0:
+                        stored[k, a, i] *= decay
+                    pull[a, i] = stored[k, a, i] * fac   # the decaying pull, and contact
         elif Q >= Z[k]:
             broken[k] = True                       # keep this step's pull, decay from the next
             for a in range(8):

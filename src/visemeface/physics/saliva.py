@@ -98,6 +98,10 @@ class SalivaParams:
         Default 0 (never): the film's energy barrier keeps pressed lips apart,
         and a film that lets go when pressed lets them pass through each other.
         (The neo-Hookean solid may want 0.25: it crushes lip tissue on /p b m/.)
+    soften : float
+        0 (default): a broken slab's pull decays by ``decay`` a step (the seed). > 0: a
+        cohesive law instead: the pull held at the break fades linearly as the film's
+        stretch λ = √Q grows from √Z to √Z + ``soften`` (saliva drawn into strands).
     """
 
     initial_moisture: float = INITIAL_MOISTURE
@@ -106,6 +110,7 @@ class SalivaParams:
     decay: float = FORCE_DECAY
     rebond_strain: float = float("inf")
     squeeze: float = 0.0
+    soften: float = 0.0
 
     def __post_init__(self):
         if not np.isfinite(self.critical_moisture) or self.critical_moisture <= 0:
@@ -114,6 +119,8 @@ class SalivaParams:
             raise InputError(f"moisture must be >= 0, got {self.initial_moisture}")
         if not np.isfinite(self.evaporation) or self.evaporation < 0:
             raise InputError(f"evaporation rate must be >= 0, got {self.evaporation}")
+        if not (np.isfinite(self.soften) and self.soften >= 0):
+            raise InputError(f"softening stretch must be >= 0, got {self.soften}")
         if not 0.0 <= self.decay < 1.0:
             raise InputError(f"force decay must be in [0, 1), got {self.decay}")
 
