@@ -160,6 +160,36 @@ class SalivaFilm:
 from numba import njit  # noqa: E402
 
 
+@njit(inline="always", cache=True)
+def _pull_push(k, uv, n, grads, volumes, modulus, lc, pull, push):  # pragma: no cover - compiled
+    """Slab k's film forces at its two points into ``pull`` (λ ≥ 1) and ``push`` (λ < 1) (see film_forces)."""
+    for gp in range(2):
+        f0, f1, f2 = n[0], n[1], n[2]
+        for a in range(8):
+            gn = grads[k, gp, a, 0] * n[0] + grads[k, gp, a, 1] * n[1] + grads[k, gp, a, 2] * n[2]
+            f0 += uv[a, 0] * gn
+            f1 += uv[a, 1] * gn
+            f2 += uv[a, 2] * gn
+        lam = np.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
+        if lam >= 1.0:
+            dw = 0.5 * modulus * (lam * lam - 1.0) * lam
+        elif lam >= lc:
+            dw = modulus * (1.0 - 1.0 / lam)
+        else:
+            dw = modulus * (1.0 - 1.0 / lc) + modulus / (lc * lc) * (lam - lc)
+        c = dw / max(lam, 1e-12) * volumes[k, gp]
+        for a in range(8):
+            gn = (grads[k, gp, a, 0] * n[0] + grads[k, gp, a, 1] * n[1] + grads[k, gp, a, 2] * n[2]) * c
+            if lam >= 1.0:
+                pull[a, 0] += gn * f0
+                pull[a, 1] += gn * f1
+                pull[a, 2] += gn * f2
+            else:
+                push[a, 0] += gn * f0
+                push[a, 1] += gn * f1
+                push[a, 2] += gn * f2
+
+
 @njit(cache=True)
 def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, stored, stretch, decay, rebond,
                squeeze, modulus, lc, soften):  # pragma: no cover - compiled
@@ -195,31 +225,7 @@ def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, st
         for i in range(3):
             fi = F[i, 0] * n[0] + F[i, 1] * n[1] + F[i, 2] * n[2]
             Q += fi * fi
-        for gp in range(2):
-            f0, f1, f2 = n[0], n[1], n[2]
-            for a in range(8):
-                gn = grads[k, gp, a, 0] * n[0] + grads[k, gp, a, 1] * n[1] + grads[k, gp, a, 2] * n[2]
-                f0 += uv[a, 0] * gn
-                f1 += uv[a, 1] * gn
-                f2 += uv[a, 2] * gn
-            lam = np.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
-            if lam >= 1.0:
-                dw = 0.5 * modulus * (lam * lam - 1.0) * lam
-            elif lam >= lc:
-                dw = modulus * (1.0 - 1.0 / lam)
-            else:
-                dw = modulus * (1.0 - 1.0 / lc) + modulus / (lc * lc) * (lam - lc)
-            c = dw / max(lam, 1e-12) * volumes[k, gp]
-            for a in range(8):
-                gn = (grads[k, gp, a, 0] * n[0] + grads[k, gp, a, 1] * n[1] + grads[k, gp, a, 2] * n[2]) * c
-                if lam >= 1.0:
-                    pull[a, 0] += gn * f0
-                    pull[a, 1] += gn * f1
-                    pull[a, 2] += gn * f2
-                else:
-                    push[a, 0] += gn * f0
-                    push[a, 1] += gn * f1
-                    push[a, 2] += gn * f2
+        _pull_push(k, uv, n, grads, volumes, modulus, lc, pull, push)
         stretch[k] = Q
         J = (F[0, 0] * (F[1, 1] * F[2, 2] - F[1, 2] * F[2, 1]) - F[0, 1] * (F[1, 0] * F[2, 2] - F[1, 2] * F[2, 0])
              + F[0, 2] * (F[1, 0] * F[2, 1] - F[1, 1] * F[2, 0]))
