@@ -50,7 +50,7 @@ def bench_fem_face(seconds: float, threads: int) -> None:
     wall = time.perf_counter() - t0
     simulated = n / sim.fps
     emit(benchmark="fem_face", threads=threads, nodes=fem.mesh.n_nodes, hexahedra=fem.mesh.n_elements,
-         saliva=len(fem.saliva), dt=sim.dt, simulated_s=round(simulated, 4), wall_s=round(wall, 2),
+         saliva=len(fem.saliva), film_slabs=getattr(getattr(sim, "film", None), "n_elements", None), dt=sim.dt, simulated_s=round(simulated, 4), wall_s=round(wall, 2),
          wall_per_simulated_s=round(wall / simulated, 1), steps_per_s=round(n * sim.steps_per_frame / wall),
          target_wall_per_simulated_s=60, load_average=os.getloadavg()[0])
 

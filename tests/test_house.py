@@ -15,10 +15,6 @@ LONG_FUNCTIONS = {
     "physics/tled.py:_element_force": "one element's forces as straight-line scalar code for numba: "
                                       "no temporaries in the parallel loop (50-100x slower with them)",
 }
-#: Modules being split by work in flight (issue 13 splits the face and the rig's new parts;
-#: issue 16 rebuilds the physics). Emptied as that work lands.
-PENDING = {"physics/drive.py", "physics/face_model.py",
-           "physics/saliva.py"}
 MAX_MODULE_LINES = 500
 MAX_FUNCTION_LINES = 100
 
@@ -31,8 +27,6 @@ def _modules():
 def test_modules_and_functions_are_small(path):
     rel = str(path.relative_to(SRC))
     text = path.read_text()
-    if rel in PENDING:
-        pytest.skip(f"{rel} is being split by work in flight (issues 13, 16)")
     if rel not in LONG_MODULES:
         assert text.count("\n") <= MAX_MODULE_LINES, f"{rel}: {text.count(chr(10))} lines"
     for node in ast.walk(ast.parse(text)):

@@ -175,12 +175,8 @@ def test_an_interrupted_simulation_resumes_without_simulating_a_frame_twice(work
     np.testing.assert_array_equal(a[:n // 2], b[:n // 2])         # replayed from the checkpoint
     np.testing.assert_allclose(a, b, rtol=0, atol=1e-7)
     assert sorted(p.name for p in (work / "cut_fr").glob("*.png")) == [f"frame_{i:06d}.png" for i in range(n)]
-    # Bit-identical outputs need the simulation's own restart to be exact. Today's StickySimulation
-    # restarts from displacement and velocity with a Taylor step and re-runs the saliva rule at the
-    # restart step (about 2e-9 m off); sticky-lips v2 (issue 16) makes it exact and turns this into
-    # a plain assertion.
-    if not np.array_equal(a, b):
-        pytest.xfail("StickySimulation's restart is not yet exact (issue 16)")
+    # The simulation's state (u, u_prev, step, saliva film) restores exactly: bit-identical outputs.
+    np.testing.assert_array_equal(a, b)
     assert (work / "full.csv").read_text() == (work / "cut.csv").read_text()
     for png in sorted((work / "full_fr").glob("*.png")):
         assert png.read_bytes() == (work / "cut_fr" / png.name).read_bytes()

@@ -15,8 +15,15 @@ tled
     boundary conditions, an element-force hook; numba kernels and a numpy
     reference.
 
+The FEM face (issue 16) is built from explicit parts: ``face_model`` (the
+extruded face and its saliva hexahedra), ``drive`` (the muscle field and the
+jaw from an activation track; ``scenarios`` for the seed's tracks), ``film``
+(the saliva film on >= 48 slabs, one compiled breaking rule; constitutive law
+in ``saliva``, glue profiles in ``glue``), ``terms`` (force terms), ``state``
+(the one exactly-restorable state), ``integrator`` (model + central
+differences) and ``simulation`` (``StickySimulation`` putting them together).
 The physics knows nothing of phonemes: the speech stages drive it through
-forces and prescribed displacements (``drive``, issue 8).
+activation tracks.
 
 Example
 -------

@@ -33,7 +33,9 @@ import numpy as np
 
 from visemeface.errors import InputError
 from visemeface.face.mesh import FaceMesh
-from visemeface.physics.hexmesh import HexMesh, element_quality, extrude_quads, vertex_normals
+from visemeface.physics.hexmesh import HexMesh, extrude_quads, vertex_normals
+from visemeface.physics.bone import relax_bone_side
+from visemeface.physics.openings import seam_openings  # noqa: F401  (re-exported)
 
 TISSUE = 0
 SALIVA = 1
@@ -48,8 +50,6 @@ SALIVA_DEPTH = 0.001
 LIP_THICKNESS = 0.004
 #: Smoothing passes of the lips' depth into the cheeks' (element shape at the mouth corners).
 DEPTH_SMOOTHING = 2
-#: Bone-side node relaxation target (least scaled Jacobian of a tissue hexahedron).
-BONE_QUALITY = 0.4
 #: Default rest gap between the lips that the saliva fills (m).
 REST_GAP = 0.001
 #: Regions never part of the FEM (they stay kinematic).
@@ -335,63 +335,23 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
     quads = face.quads[mask]
     pairs = seam_pairs(face)
     if saliva_gap is not None:
-        if not (np.isfinite(saliva_gap) and saliva_gap >= min_gap):
-            raise InputError(f"saliva gap must be >= {min_gap * 1e3:.3g} mm for a stable 1e-5 s step, "
-                             f"got {saliva_gap * 1e3:.3g} mm")
-        v = face.vertices.copy()
-        mid = 0.5 * (v[pairs[:, 0]] + v[pairs[:, 1]])
-        v[pairs[:, 0]] = mid + [0.0, 0.5 * saliva_gap, 0.0]
-        v[pairs[:, 1]] = mid - [0.0, 0.5 * saliva_gap, 0.0]
-        face = FaceMesh(v, face.quads, face.tris, dict(face.regions), dict(face.landmarks), face.colors)
+        face = _regap(face, pairs, saliva_gap, min_gap)
     used = np.unique(quads)
     missing = np.setdiff1d(pairs.ravel(), used)
     if len(missing):
         raise InputError(f"lip seam vertex {int(missing[0])} is on no tissue quad of the lower face")
-    gaps = np.linalg.norm(face.vertices[pairs[:, 0]] - face.vertices[pairs[:, 1]], axis=1)
-    # Toward the corners the lips meet; saliva thinner than min_gap would force a
-    # smaller time step, so the layer stops where the gap gets that thin.
-    keep = gaps >= min_gap
-    if keep.sum() < 2:
-        raise InputError(f"rest gap between the lips is {gaps.max() * 1e3:.3g} mm at most, "
-                         f"< {min_gap * 1e3:.3g} mm: too thin for saliva elements at dt 1e-5 s; "
-                         f"build the face with a rest gap (default_face(rest_gap={REST_GAP}))")
-    pairs = pairs[keep]
+    pairs = _gapped_pairs(face, pairs, min_gap)
     # Paired seam vertices share one extrusion direction so each saliva element is a slab.
     normals = smoothed_normals(face.vertices, quads)
     common = normals[pairs[:, 0]] + normals[pairs[:, 1]]
     common /= np.linalg.norm(common, axis=1, keepdims=True)
     normals[pairs[:, 0]] = common
     normals[pairs[:, 1]] = common
-    depth = np.full(face.n_vertices, float(thickness))
-    lip_w = np.zeros(face.n_vertices)
-    if lip_thickness is not None:
-        if not (np.isfinite(lip_thickness) and lip_thickness > 0):
-            raise InputError(f"lip thickness must be > 0, got {lip_thickness}")
-        lips = np.zeros(face.n_vertices, dtype=bool)
-        for name in ("upper_lip", "lower_lip"):
-            if name in face.regions:
-                lips[face.regions[name]] = True
-        depth[lips] = lip_thickness
-        lip_w = _smooth_on_quads(lips.astype(np.float64), quads, passes=2)
-        # The depth changes three-fold from lips to cheeks: spread that change over
-        # more elements than the lip weight, or the mouth corners' deep hexahedra
-        # come out nearly flat (scaled Jacobian ~0.05) and invert on wide openings.
-        depth_w = _smooth_on_quads(lips.astype(np.float64), quads, passes=DEPTH_SMOOTHING)
-        depth = thickness + (lip_thickness - thickness) * depth_w
+    depth, lip_w = _lip_depth(face, quads, thickness, lip_thickness)
     tissue = extrude_quads(face.vertices, quads, depth, layers=layers, material=TISSUE, normals=normals,
                            check=False)
     S = len(tissue.surface_vertices)
-    t_s = depth[tissue.surface_vertices][:, None]
-    if saliva_depth is not None and layers >= 2:
-        if not (0 < saliva_depth < t_s.min()):
-            raise InputError(f"saliva depth must be in (0, {t_s.min() * 1e3:.3g} mm), got {saliva_depth * 1e3:.3g} mm")
-        surf, n = tissue.nodes[:S], normals[tissue.surface_vertices]
-        fr = [np.zeros_like(t_s), np.full_like(t_s, saliva_depth)] + \
-             [saliva_depth + (t_s - saliva_depth) * k / (layers - 1) for k in range(1, layers)]
-        tissue.nodes = np.concatenate([surf - d * n for d in fr])
-        depth_fraction = np.stack([d[:, 0] for d in fr]) / t_s[:, 0]
-    else:
-        depth_fraction = np.repeat(np.linspace(0.0, 1.0, layers + 1)[:, None], S, axis=1)
+    depth_fraction = _layer_nodes(tissue, normals, depth, layers, saliva_depth)
     if layers >= 2:
         tissue.nodes = relax_bone_side(tissue.nodes, tissue.hexes, S, layers)
     saliva_layers = 1 if (saliva_depth is not None and layers >= 2) else layers
@@ -404,26 +364,11 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
     seam_s = ((face.vertices[pairs] - origin) @ axis).mean(axis=1) / (0.5 * width)
     a = np.arange(len(pairs) - 1)
     b = a + 1
-    up, lo = node_of[pairs[:, 0]], node_of[pairs[:, 1]]
-    sal = []
-    for L in range(saliva_layers):
-        inner, outer = (L + 1) * S, L * S
-        sal.append(np.stack([lo[a] + inner, lo[b] + inner, up[b] + inner, up[a] + inner,
-                             lo[a] + outer, lo[b] + outer, up[b] + outer, up[a] + outer], axis=1))
-    sal = np.concatenate(sal)
+    sal = _saliva_hexes(node_of[pairs[:, 0]], node_of[pairs[:, 1]], S, saliva_layers)
     hexes = np.concatenate([tissue.hexes, sal])
     material = np.concatenate([tissue.material, np.full(len(sal), SALIVA)])
 
-    inner_nodes = tissue.node_sets["inner"]
-    above = tissue.surface_vertices[inner_nodes - layers * S]
-    jaw_vertices = np.zeros(face.n_vertices, dtype=bool)
-    jaw_vertices[face.region("jaw")] = True
-    bone = inner_nodes
-    on_jaw = jaw_vertices[above]
-    sets = dict(tissue.node_sets)
-    sets["jaw"] = bone[on_jaw]
-    sets["fixed"] = bone[~on_jaw]
-    mesh = HexMesh(tissue.nodes, hexes, material=material, node_sets=sets,
+    mesh = HexMesh(tissue.nodes, hexes, material=material, node_sets=_bone_sets(face, tissue, layers),
                    surface_vertices=tissue.surface_vertices)
     from visemeface.physics.hexmesh import check_quality
     check_quality(mesh, max_aspect=None)
@@ -435,87 +380,86 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
                    depth_fraction=depth_fraction, lip_weight=lip_w[tissue.surface_vertices])
 
 
-def relax_bone_side(nodes, hexes, S: int, layers: int, q_min: float = BONE_QUALITY,
-                    iterations: int = 60) -> np.ndarray:
-    """Move bone-side nodes of badly shaped hexahedra toward their neighbours' mean.
+def _gapped_pairs(face: FaceMesh, pairs, min_gap: float) -> np.ndarray:
+    """The seam pairs at least ``min_gap`` apart: toward the corners the lips meet, and
+    saliva thinner than that would force a smaller time step."""
+    gaps = np.linalg.norm(face.vertices[pairs[:, 0]] - face.vertices[pairs[:, 1]], axis=1)
+    keep = gaps >= min_gap
+    if keep.sum() < 2:
+        raise InputError(f"rest gap between the lips is {gaps.max() * 1e3:.3g} mm at most, "
+                         f"< {min_gap * 1e3:.3g} mm: too thin for saliva elements at dt 1e-5 s; "
+                         f"build the face with a rest gap (default_face(rest_gap={REST_GAP}))")
+    return pairs[keep]
 
-    Where the surface is concave (the mouth corners) the extrusion normals
-    converge and the bone-side nodes of neighbouring columns bunch up: hexahedra
-    come out nearly flat (scaled Jacobian ~0.05,
-    :func:`~visemeface.physics.hexmesh.element_quality`) and a
-    wide jaw opening turns them inside out. The bone side is not seen; each pass
-    moves the bone-side nodes of elements with quality < ``q_min`` halfway to the
-    mean of their bone-side neighbours (Laplacian smoothing), the skin and the
-    saliva layer stay put. Stops when every element reaches ``q_min`` or the
-    worst one stops improving.
+
+def _layer_nodes(tissue, normals, depth, layers: int, saliva_depth) -> np.ndarray:
+    """Place the node layers (the first ``saliva_depth`` deep) in place; their depth fractions (layers + 1, S)."""
+    S = len(tissue.surface_vertices)
+    t_s = depth[tissue.surface_vertices][:, None]
+    if saliva_depth is None or layers < 2:
+        return np.repeat(np.linspace(0.0, 1.0, layers + 1)[:, None], S, axis=1)
+    if not (0 < saliva_depth < t_s.min()):
+        raise InputError(f"saliva depth must be in (0, {t_s.min() * 1e3:.3g} mm), got {saliva_depth * 1e3:.3g} mm")
+    surf, n = tissue.nodes[:S], normals[tissue.surface_vertices]
+    fr = [np.zeros_like(t_s), np.full_like(t_s, saliva_depth)] + \
+         [saliva_depth + (t_s - saliva_depth) * k / (layers - 1) for k in range(1, layers)]
+    tissue.nodes = np.concatenate([surf - d * n for d in fr])
+    return np.stack([d[:, 0] for d in fr]) / t_s[:, 0]
+
+
+def _bone_sets(face: FaceMesh, tissue, layers: int) -> dict:
+    """The tissue's node sets plus ``jaw`` (bone side under the jaw region) and ``fixed`` (the rest)."""
+    S = len(tissue.surface_vertices)
+    bone = tissue.node_sets["inner"]
+    jaw_vertices = np.zeros(face.n_vertices, dtype=bool)
+    jaw_vertices[face.region("jaw")] = True
+    on_jaw = jaw_vertices[tissue.surface_vertices[bone - layers * S]]
+    return {**tissue.node_sets, "jaw": bone[on_jaw], "fixed": bone[~on_jaw]}
+
+
+def _regap(face: FaceMesh, pairs, saliva_gap: float, min_gap: float) -> FaceMesh:
+    """A copy of ``face`` with each seam pair moved apart (along y) to the uniform ``saliva_gap``."""
+    if not (np.isfinite(saliva_gap) and saliva_gap >= min_gap):
+        raise InputError(f"saliva gap must be >= {min_gap * 1e3:.3g} mm for a stable 1e-5 s step, "
+                         f"got {saliva_gap * 1e3:.3g} mm")
+    v = face.vertices.copy()
+    mid = 0.5 * (v[pairs[:, 0]] + v[pairs[:, 1]])
+    v[pairs[:, 0]] = mid + [0.0, 0.5 * saliva_gap, 0.0]
+    v[pairs[:, 1]] = mid - [0.0, 0.5 * saliva_gap, 0.0]
+    return FaceMesh(v, face.quads, face.tris, dict(face.regions), dict(face.landmarks), face.colors)
+
+
+def _lip_depth(face: FaceMesh, quads, thickness: float, lip_thickness):
+    """Tissue depth per face vertex and the lip weight (1 under the lips, blended over two rings)."""
+    depth = np.full(face.n_vertices, float(thickness))
+    lip_w = np.zeros(face.n_vertices)
+    if lip_thickness is None:
+        return depth, lip_w
+    if not (np.isfinite(lip_thickness) and lip_thickness > 0):
+        raise InputError(f"lip thickness must be > 0, got {lip_thickness}")
+    lips = np.zeros(face.n_vertices, dtype=bool)
+    for name in ("upper_lip", "lower_lip"):
+        if name in face.regions:
+            lips[face.regions[name]] = True
+    lip_w = _smooth_on_quads(lips.astype(np.float64), quads, passes=2)
+    # The depth changes three-fold from lips to cheeks: spread that change over
+    # more elements than the lip weight, or the mouth corners' deep hexahedra
+    # come out nearly flat (scaled Jacobian ~0.05) and invert on wide openings.
+    depth_w = _smooth_on_quads(lips.astype(np.float64), quads, passes=DEPTH_SMOOTHING)
+    return thickness + (lip_thickness - thickness) * depth_w, lip_w
+
+
+def _saliva_hexes(up, lo, S: int, layers: int) -> np.ndarray:
+    """Saliva hexahedra between neighbouring seam pairs (surface node ids ``up``/``lo``), per layer.
+
+    Node order (ξ along the seam toward the subject's left, η from the lower lip
+    up, ζ from the bone side out).
     """
-    nodes = np.array(nodes, dtype=np.float64)
-    hexes = np.asarray(hexes, dtype=np.int64)
-    inner = layers * S
-    # bone-side neighbours: nodes sharing a hexahedron face on the bone side
-    rows, cols = [], []
-    for h in hexes:
-        b = h[h >= inner]
-        for x in b:
-            for y in b:
-                if x != y:
-                    rows.append(x)
-                    cols.append(y)
-    if not rows:
-        return nodes
-    import scipy.sparse as sp
-    n = len(nodes)
-    A = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
-    A.data[:] = 1.0
-    deg = np.asarray(A.sum(axis=1)).ravel()
-    def quality(x):
-        return element_quality(HexMesh(x, hexes))["scaled_jacobian"]
-
-    q = quality(nodes)
-    for _ in range(iterations):
-        bad = q < q_min
-        if not bad.any():
-            break
-        move = np.unique(hexes[bad])
-        move = move[(move >= inner) & (deg[move] > 0)]
-        mean = (A[move] @ nodes) / deg[move, None]
-        trial = nodes.copy()
-        trial[move] = 0.5 * (nodes[move] + mean)
-        q_new = quality(trial)
-        if q_new.min() <= q.min():
-            break
-        nodes, q = trial, q_new
-    return nodes
-
-
-def seam_openings(fem: FEMFace, vertices, rest_gaps=None, threshold: float = 0.02) -> dict:
-    """Openings along the lip seam, measured on the mesh.
-
-    A seam pair is *open* when its gap exceeds the rest gap by more than
-    ``threshold`` mouth widths. Contiguous open pairs form one opening.
-
-    Returns
-    -------
-    dict
-        ``count`` (number of openings), ``span`` (across-mouth extent of the
-        widest opening, in mouth widths: (s_max − s_min)/2), ``open_fraction``
-        (share of open pairs), ``centre_gap`` (gap growth at the pair nearest
-        the centre, mouth widths), ``open`` (P,) bool.
-    """
-    gaps = fem.seam_gaps(vertices)
-    if rest_gaps is None:
-        rest_gaps = fem.seam_gaps(fem.face.vertices)
-    growth = (gaps - rest_gaps) / fem.mouth_width
-    is_open = growth > threshold
-    runs, start = [], None
-    for i, o in enumerate(np.append(is_open, False)):
-        if o and start is None:
-            start = i
-        elif not o and start is not None:
-            runs.append((start, i - 1))
-            start = None
-    s = fem.seam_s
-    spans = [(s[j] - s[i]) / 2.0 for i, j in runs]
-    centre = int(np.argmin(np.abs(s)))
-    return {"count": len(runs), "span": float(max(spans)) if spans else 0.0,
-            "open_fraction": float(is_open.mean()), "centre_gap": float(growth[centre]), "open": is_open}
+    a = np.arange(len(up) - 1)
+    b = a + 1
+    sal = []
+    for L in range(layers):
+        inner, outer = (L + 1) * S, L * S
+        sal.append(np.stack([lo[a] + inner, lo[b] + inner, up[b] + inner, up[a] + inner,
+                             lo[a] + outer, lo[b] + outer, up[b] + outer, up[a] + outer], axis=1))
+    return np.concatenate(sal)

@@ -30,39 +30,41 @@ Two choices the seed leaves open, made here and documented:
   the breaking point of its *current* moisture: the lips stick again after
   every closure (the sticky release of /p b m/), and evaporation matters over
   a run (later openings unzip faster).
-* **Film.** By default (``model="film"``) the saliva carries stress only
-  across the lips (:func:`film_forces`): a liquid film flows in its own plane.
-  ``model="neo-hookean"`` is the seed's full solid.
-* **Glue per element.** ``K_glue`` is an array: uniform, a profile across the
-  mouth (:func:`parse_glue_profile`) or read from a file
-  (:func:`read_glue_file`).
+* **Film.** The saliva carries stress only across the lips
+  (:func:`film_forces`): a liquid film flows in its own plane (the seed's full
+  neo-Hookean solid answered in-plane motion with its bulk modulus and crushed
+  pressed lips).
+* **Its own discretisation.** :class:`SalivaFilm` splits each saliva
+  hexahedron of the face model into slabs along the seam, at least
+  :data:`FILM_ELEMENTS` across the mouth whatever the face mesh's resolution;
+  each slab's nodes are interpolated linearly along the seam from the lip
+  tissue's nodes (the hexahedron's own trilinear field, so the slabs tile it
+  exactly) and its forces go back to those nodes with the same weights.
+  Between two seam vertices the stretch varies along the seam, so the slabs
+  break one after another and the open span grows in steps of 1/48 of the
+  mouth, not one face-mesh element at a time.
+* **Glue per element.** ``K_glue`` is an array over the slabs
+  (:mod:`visemeface.physics.glue`).
 
-Everything here is a pure function over numpy arrays except
-:class:`SalivaBreaking`, the per-step state machine used as the TLED solver's
-element-force hook.
+The rule runs once, compiled (:func:`_film_step`); a plain-numpy reference
+lives in the tests (``tests/physics/film_reference.py``).
 """
 
 from __future__ import annotations
 
-import csv
-import re
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from visemeface.errors import InputError
+from visemeface.physics.glue import (CENTRAL_GLUE, GLUE, glue_per_element,  # noqa: F401  (their home is glue)
+                                     parse_glue_profile, read_glue_file)
 
 #: Seed 000 / 001 Table 1 (the saliva's elastic constants are ``materials.SALIVA``).
 INITIAL_MOISTURE = 100.0
 CRITICAL_MOISTURE = 100.0
 EVAPORATION_RATE = 0.0
-GLUE = 0.08
-CENTRAL_GLUE = 0.18
 FORCE_DECAY = 0.99
-#: Saliva constitutive models: ``film`` (stress across the lips only, the default) or the
-#: seed's full ``neo-hookean`` solid.
-SALIVA_MODELS = ("film", "neo-hookean")
 
 #: Hex8 natural-coordinate signs of the nodes, order (−,−,−) (+,−,−) (+,+,−) (−,+,−), then z+.
 HEX_SIGNS = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
@@ -96,8 +98,10 @@ class SalivaParams:
         Default 0 (never): the film's energy barrier keeps pressed lips apart,
         and a film that lets go when pressed lets them pass through each other.
         (The neo-Hookean solid may want 0.25: it crushes lip tissue on /p b m/.)
-    model : {"film", "neo-hookean"}
-        The saliva's constitutive model (:func:`film_forces`, or the seed's solid).
+    soften : float
+        0 (default): a broken slab's pull decays by ``decay`` a step (the seed). > 0: a
+        cohesive law instead: the pull held at the break fades linearly as the film's
+        stretch λ = √Q grows from √Z to √Z + ``soften`` (saliva drawn into strands).
     """
 
     initial_moisture: float = INITIAL_MOISTURE
@@ -106,7 +110,7 @@ class SalivaParams:
     decay: float = FORCE_DECAY
     rebond_strain: float = float("inf")
     squeeze: float = 0.0
-    model: str = "film"
+    soften: float = 0.0
 
     def __post_init__(self):
         if not np.isfinite(self.critical_moisture) or self.critical_moisture <= 0:
@@ -115,10 +119,10 @@ class SalivaParams:
             raise InputError(f"moisture must be >= 0, got {self.initial_moisture}")
         if not np.isfinite(self.evaporation) or self.evaporation < 0:
             raise InputError(f"evaporation rate must be >= 0, got {self.evaporation}")
+        if not (np.isfinite(self.soften) and self.soften >= 0):
+            raise InputError(f"softening stretch must be >= 0, got {self.soften}")
         if not 0.0 <= self.decay < 1.0:
             raise InputError(f"force decay must be in [0, 1), got {self.decay}")
-        if self.model not in SALIVA_MODELS:
-            raise InputError(f"saliva model must be one of {', '.join(SALIVA_MODELS)}, got {self.model!r}")
 
 
 def moisture(t, initial_moisture, evaporation):
@@ -310,397 +314,3 @@ def stretch_across(F, axis):
     """
     Fn = np.einsum("eij,ej->ei", F, axis)
     return np.sum(Fn * Fn, axis=1)
-
-
-# --------------------------------------------------------------------------- glue profiles
-
-_ITEM = re.compile(r"^\s*([A-Za-z_]+|[-+]?\d*\.?\d+\s*\.\.\s*[-+]?\d*\.?\d+)\s*=\s*([^=]+?)\s*$")
-_NAMED = ("centre", "center", "left", "right", "corners", "all")
-
-
-def _positive_glue(text: str, spec: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise InputError(f"glue profile {spec!r}: {text!r} is not a number") from None
-    if not np.isfinite(v) or v < 0:
-        raise InputError(f"glue profile {spec!r}: glue must be >= 0, got {v}")
-    return v
-
-
-def parse_glue_profile(spec: str, s, base: float = GLUE) -> np.ndarray:
-    """Glue strength per saliva element from a profile across the mouth.
-
-    Parameters
-    ----------
-    spec : str
-        Comma-separated ``WHERE=VALUE`` items applied left to right over
-        ``base``. WHERE is ``all``; ``centre`` (the element(s) nearest the
-        mouth centre, ties included: seed 001's "central element");
-        ``left`` / ``right`` (the subject's left, s > 0 / right, s < 0);
-        ``corners`` (|s| ≥ 0.7); or a range ``a..b`` of s. A bare number sets
-        ``all``. Example: ``"centre=0.18"``, ``"left=0.2,-0.1..0.1=0"``.
-    s : (E,) array
-        Element-centre positions across the mouth, −1 at the right corner,
-        0 at the centre, +1 at the left corner.
-    base : float
-        Glue of elements no item names.
-
-    Raises
-    ------
-    InputError
-        Unparseable item, negative value, or an item naming no element.
-
-    Examples
-    --------
-    >>> parse_glue_profile("centre=0.18", np.array([-0.5, -0.1, 0.2, 0.6]))
-    array([0.08, 0.18, 0.08, 0.08])
-    """
-    s = np.asarray(s, dtype=np.float64)
-    glue = np.full(len(s), float(base))
-    spec = str(spec).strip()
-    if not spec:
-        raise InputError("empty glue profile")
-    for item in spec.split(","):
-        try:
-            glue[:] = _positive_glue(item, spec)
-            continue
-        except InputError:
-            pass
-        m = _ITEM.match(item)
-        if not m:
-            raise InputError(f"glue profile {spec!r}: cannot read {item.strip()!r} "
-                             "(expected WHERE=VALUE, WHERE one of centre, left, right, corners, all, a..b)")
-        where, value = m.group(1).strip().lower(), _positive_glue(m.group(2), spec)
-        if ".." in where:
-            a, b = sorted(float(x) for x in where.split(".."))
-            sel = (s >= a) & (s <= b)
-        elif where in ("centre", "center"):
-            d = np.abs(s)
-            sel = d <= d.min() + 1e-9 if len(s) else np.zeros(0, bool)
-        elif where == "left":
-            sel = s > 0
-        elif where == "right":
-            sel = s < 0
-        elif where == "corners":
-            sel = np.abs(s) >= 0.7
-        elif where == "all":
-            sel = np.ones(len(s), bool)
-        else:
-            from visemeface.errors import close_matches
-            raise InputError(f"glue profile {spec!r}: unknown place {where!r}" + close_matches(where, _NAMED))
-        if not sel.any():
-            raise InputError(f"glue profile {spec!r}: {item.strip()!r} names no saliva element "
-                             f"(elements span s = {s.min():.2f}..{s.max():.2f})")
-        glue[sel] = value
-    return glue
-
-
-def read_glue_file(path, s) -> np.ndarray:
-    """Glue per saliva element from a CSV file.
-
-    Two layouts (header line required):
-
-    * ``element,glue``: one row per element index (0-based, along the seam
-      from the subject's right corner); every element must be given.
-    * ``s,glue``: a profile across the mouth (s from −1, right corner, to +1,
-      left corner), linearly interpolated at the element centres ``s``.
-    """
-    path = Path(path)
-    s = np.asarray(s, dtype=np.float64)
-    try:
-        with open(path, newline="") as fh:
-            rows = list(csv.reader(fh))
-    except OSError as e:
-        raise InputError(f"cannot read glue file: {e.strerror}", path) from None
-    except (UnicodeDecodeError, csv.Error):
-        raise InputError("not a glue CSV file (not text)", path) from None
-    rows = [r for r in rows if r and any(c.strip() for c in r)]
-    if not rows:
-        raise InputError("empty glue file", path)
-    header = [c.strip().lower() for c in rows[0]]
-    if header not in (["element", "glue"], ["s", "glue"]):
-        raise InputError(f"header must be 'element,glue' or 's,glue', got {','.join(rows[0])!r}", path, 1)
-    keys, vals = [], []
-    for i, row in enumerate(rows[1:], start=2):
-        if len(row) != 2:
-            raise InputError(f"expected 2 columns, got {len(row)}", path, i)
-        try:
-            k, v = float(row[0]), float(row[1])
-        except ValueError:
-            raise InputError(f"not a number in {','.join(row)!r}", path, i) from None
-        if not np.isfinite(v) or v < 0:
-            raise InputError(f"glue must be >= 0, got {row[1].strip()}", path, i)
-        keys.append(k)
-        vals.append(v)
-    if not keys:
-        raise InputError("no glue values", path)
-    keys, vals = np.array(keys), np.array(vals)
-    if header[0] == "element":
-        idx = keys.astype(np.int64)
-        bad = (idx != keys) | (idx < 0) | (idx >= len(s))
-        if bad.any():
-            raise InputError(f"element {keys[bad][0]:g} names no saliva element (0..{len(s) - 1})", path)
-        glue = np.full(len(s), np.nan)
-        glue[idx] = vals
-        if np.isnan(glue).any():
-            raise InputError(f"missing elements {np.flatnonzero(np.isnan(glue))[:5].tolist()}", path)
-        return glue
-    order = np.argsort(keys)
-    return np.interp(s, keys[order], vals[order])
-
-
-def glue_per_element(s, glue: float = GLUE, profile: str | None = None,
-                     path: str | Path | None = None) -> np.ndarray:
-    """Combine the three ways of giving glue: uniform ``glue``, then a ``profile``, or a file."""
-    s = np.asarray(s, dtype=np.float64)
-    if not np.isfinite(glue) or glue < 0:
-        raise InputError(f"glue must be >= 0, got {glue}")
-    if path is not None:
-        return read_glue_file(path, s)
-    if profile:
-        return parse_glue_profile(profile, s, base=glue)
-    return np.full(len(s), float(glue))
-
-
-# --------------------------------------------------------------------------- the breaking state
-
-class SalivaBreaking:
-    """Per-step state of the saliva layer, used as the solver's element-force hook.
-
-    Call :meth:`update` once per step with the current saliva-element node
-    displacements and their freshly computed (unmodified) element forces; it
-    returns the forces to assemble: the elastic forces of intact elements and
-    the geometrically decaying stored forces of broken ones. Vectorised over
-    elements.
-
-    Parameters
-    ----------
-    X : (E, 8, 3) reference node positions of the saliva elements.
-    glue : (E,) glue strength K_glue per element.
-    params : SalivaParams
-    """
-
-    def __init__(self, X, glue, params: SalivaParams = SalivaParams()):
-        X = np.asarray(X, dtype=np.float64)
-        self.params = params
-        self.glue = np.broadcast_to(np.asarray(glue, dtype=np.float64), (len(X),)).copy()
-        self.axis = element_frames(X)[:, 1]
-        self.X = X
-        self.grads, self.volumes = film_gradients(X)
-        #: Callable returning the current node displacements (n, 3) for the compiled hook
-        #: (the film needs them); set by whoever runs the solver.
-        self.node_displacement = None
-        from visemeface.physics.materials import SALIVA
-        self.modulus = SALIVA.p_wave_modulus
-        self.film = params.model == "film"
-        self.broken = np.zeros(len(X), dtype=bool)
-        #: Squeezed out (no film) until the lips are back apart to the film's thickness.
-        self.dry = np.zeros(len(X), dtype=bool)
-        self.stored = np.zeros((len(X), 8, 3))
-        self.stretch = np.ones(len(X))
-        self.breaking = np.full(len(X), 1.0)
-
-    def breaking_points(self, t: float) -> np.ndarray:
-        """Z per element at time ``t``."""
-        p = self.params
-        return breaking_point(moisture(t, p.initial_moisture, p.evaporation), p.critical_moisture, self.glue)
-
-    def update(self, t: float, F, forces, u=None):
-        """Advance the state to time ``t`` and return the forces to assemble.
-
-        Parameters
-        ----------
-        t : float
-            Simulated time (s).
-        F : (E, 3, 3) current deformation gradients of the saliva elements.
-        forces : (E, 8, 3) unmodified internal element forces (ignored by the film model).
-        u : (E, 8, 3), optional
-            Element node displacements (the film model); default the affine
-            displacement of ``F`` about each element's centre.
-
-        Returns
-        -------
-        (E, 8, 3) modified forces (a new array).
-        """
-        F = np.asarray(F, dtype=np.float64)
-        Q = stretch_across(F, self.axis)
-        if self.film:
-            if u is None:
-                Xc = self.X - self.X.mean(axis=1, keepdims=True)
-                u = np.einsum("eij,eaj->eai", F - np.eye(3), Xc)
-            pull, push, _ = film_forces(u, self.axis, self.grads, self.volumes, self.modulus)
-        Q = np.where(np.linalg.det(F) > 0.0, Q, 1e300)     # folded over: cannot push
-        C = np.swapaxes(F, 1, 2) @ F
-        strain = np.abs(C - np.eye(3)).max(axis=(1, 2))
-        Z = self.breaking_points(t)
-        self.stretch, self.breaking = Q, Z
-        out = pull + push if self.film else np.array(forces, dtype=np.float64, copy=True)
-        # A squeezed-out film stays gone (no force) until the lips are back apart to its
-        # thickness (Q >= 1, not folded), where it re-forms intact: no force jump on the way.
-        back = self.dry & (Q >= 1.0) & (Q < 1e300)
-        self.dry &= ~back
-        self.broken &= ~back
-        squeezed = (Q < self.params.squeeze) | self.dry
-        # Re-bond where the lips are back together near their rest shape.
-        self.broken &= ~((Q <= 1.0) & (strain <= self.params.rebond_strain) & ~squeezed)
-        newly = (~self.broken) & (Q >= Z) & ~squeezed
-        self.stored[newly] = (pull if self.film else out)[newly]
-        self.stored[self.broken] *= self.params.decay
-        if self.film:                               # broken: the decaying pull, and contact
-            out[self.broken] = self.stored[self.broken] + push[self.broken]
-        else:
-            pulled = self.broken & (Q >= 1.0)
-            out[pulled] = self.stored[pulled]       # broken and pulled: the decaying force
-        self.broken |= newly                        # broken and pressed: elastic contact
-        self.broken |= squeezed                     # squeezed out: no force at all
-        self.dry |= squeezed
-        self.stored[squeezed] = 0.0
-        out[squeezed] = 0.0
-        return out
-
-    def hook(self, elements, nodes=None):
-        """The TLED solver's ``element_hook`` for saliva elements at mesh ids ``elements``.
-
-        ``nodes`` (E, 8) are the elements' node ids (needed by the film model,
-        which reads the displacements from :attr:`node_displacement`).
-        ``hook(step, t, F, forces)`` applies :meth:`update`'s rule to
-        ``forces[elements]`` in place, in one compiled pass (no allocation per
-        step); breaking points are recomputed only when moisture changes.
-        """
-        elements = np.ascontiguousarray(elements, dtype=np.int64)
-        p = self.params
-        dry = p.evaporation == 0.0
-        Z0 = self.breaking_points(0.0)
-
-        if self.film and nodes is None:
-            raise ValueError("the film model's hook needs the saliva elements' node ids")
-        nodes = np.ascontiguousarray(nodes if nodes is not None else np.zeros((len(elements), 8)), dtype=np.int64)
-        empty = np.zeros((1, 3))
-
-        def element_hook(step, t, F, forces):
-            Z = Z0 if dry else self.breaking_points(t)
-            self.breaking = Z
-            u = self.node_displacement() if self.film else empty
-            _saliva_step(F, forces, elements, self.axis, Z, self.broken, self.dry, self.stored, self.stretch, p.decay,
-                         p.rebond_strain, p.squeeze, self.film, u, nodes, self.grads, self.volumes, self.modulus,
-                         FILM_STIFF_STRETCH)
-            return None
-
-        return element_hook
-
-    def prime(self, F, t: float = 0.0) -> None:
-        """Start from a deformed state: elements already stretched past Z are parted (no force)."""
-        Q = stretch_across(np.asarray(F, dtype=np.float64), self.axis)
-        Q = np.where(np.linalg.det(F) > 0.0, Q, 1e300)
-        self.stretch = Q
-        parted = Q >= self.breaking_points(t)
-        self.broken |= parted
-        self.stored[parted] = 0.0
-
-    def state(self) -> dict:
-        """Arrays needed to resume: broken flags and stored forces."""
-        return {"broken": self.broken.copy(), "dry": self.dry.copy(), "stored": self.stored.copy()}
-
-    def set_state(self, state: dict) -> None:
-        self.broken = np.asarray(state["broken"], dtype=bool).copy()
-        self.dry = np.asarray(state.get("dry", np.zeros_like(self.broken)), dtype=bool).copy()
-        self.stored = np.asarray(state["stored"], dtype=np.float64).copy()
-
-
-from visemeface.physics import tled as _tled  # noqa: E402,F401  (chooses numba's cache folder first)
-from numba import njit  # noqa: E402
-
-
-@njit(cache=True)
-def _saliva_step(F, forces, elements, axis, Z, broken, dry, stored, stretch, decay, rebond, squeeze,
-                 film, u, nodes, grads, volumes, modulus, lc):  # pragma: no cover
-    """:meth:`SalivaBreaking.update` in place over ``forces[elements]`` (same rule)."""
-    pull = np.zeros((8, 3))
-    push = np.zeros((8, 3))
-    for k in range(elements.shape[0]):
-        e = elements[k]
-        n0, n1, n2 = axis[k, 0], axis[k, 1], axis[k, 2]
-        a0 = F[e, 0, 0] * n0 + F[e, 0, 1] * n1 + F[e, 0, 2] * n2
-        a1 = F[e, 1, 0] * n0 + F[e, 1, 1] * n1 + F[e, 1, 2] * n2
-        a2 = F[e, 2, 0] * n0 + F[e, 2, 1] * n1 + F[e, 2, 2] * n2
-        Q = a0 * a0 + a1 * a1 + a2 * a2
-        if film:                                   # see film_forces
-            for a in range(8):
-                for i in range(3):
-                    pull[a, i] = 0.0
-                    push[a, i] = 0.0
-            for gp in range(2):
-                # F n at the point: n + sum_a u_a (grad_a . n)
-                f0, f1, f2 = n0, n1, n2
-                for a in range(8):
-                    gn = grads[k, gp, a, 0] * n0 + grads[k, gp, a, 1] * n1 + grads[k, gp, a, 2] * n2
-                    node = nodes[k, a]
-                    f0 += u[node, 0] * gn
-                    f1 += u[node, 1] * gn
-                    f2 += u[node, 2] * gn
-                lam = np.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
-                if lam >= 1.0:
-                    dw = 0.5 * modulus * (lam * lam - 1.0) * lam
-                elif lam >= lc:
-                    dw = modulus * (1.0 - 1.0 / lam)
-                else:
-                    dw = modulus * (1.0 - 1.0 / lc) + modulus / (lc * lc) * (lam - lc)
-                c = dw / max(lam, 1e-12) * volumes[k, gp]
-                for a in range(8):
-                    gn = (grads[k, gp, a, 0] * n0 + grads[k, gp, a, 1] * n1 + grads[k, gp, a, 2] * n2) * c
-                    if lam >= 1.0:
-                        pull[a, 0] += gn * f0
-                        pull[a, 1] += gn * f1
-                        pull[a, 2] += gn * f2
-                    else:
-                        push[a, 0] += gn * f0
-                        push[a, 1] += gn * f1
-                        push[a, 2] += gn * f2
-            for a in range(8):
-                for i in range(3):
-                    forces[e, a, i] = pull[a, i] + push[a, i]
-        stretch[k] = Q
-        J = (F[e, 0, 0] * (F[e, 1, 1] * F[e, 2, 2] - F[e, 1, 2] * F[e, 2, 1])
-             - F[e, 0, 1] * (F[e, 1, 0] * F[e, 2, 2] - F[e, 1, 2] * F[e, 2, 0])
-             + F[e, 0, 2] * (F[e, 1, 0] * F[e, 2, 1] - F[e, 1, 1] * F[e, 2, 0]))
-        if J <= 0.0:
-            Q = 1e300                              # folded over: a broken film cannot push
-        if dry[k] and Q >= 1.0 and Q < 1e300:      # lips apart to the film's thickness: it re-forms
-            dry[k] = False
-            broken[k] = False
-        if dry[k] or Q < squeeze:                  # squeezed out between pressed lips
-            dry[k] = True
-            broken[k] = True
-            for a in range(8):
-                for i in range(3):
-                    stored[k, a, i] = 0.0
-                    forces[e, a, i] = 0.0
-            continue
-        if broken[k] and Q <= 1.0:
-            strain = 0.0
-            for i in range(3):
-                for j in range(3):
-                    c = F[e, 0, i] * F[e, 0, j] + F[e, 1, i] * F[e, 1, j] + F[e, 2, i] * F[e, 2, j]
-                    if i == j:
-                        c -= 1.0
-                    strain = max(strain, abs(c))
-            if strain <= rebond:
-                broken[k] = False                  # lips back together: re-bond
-        if broken[k]:
-            for a in range(8):
-                for i in range(3):
-                    stored[k, a, i] *= decay
-            if film:                               # the decaying pull, and contact
-                for a in range(8):
-                    for i in range(3):
-                        forces[e, a, i] = stored[k, a, i] + push[a, i]
-            elif Q >= 1.0:                         # pulled: only the decaying force
-                for a in range(8):
-                    for i in range(3):
-                        forces[e, a, i] = stored[k, a, i]
-        elif Q >= Z[k]:
-            broken[k] = True                       # keep this step's force, decay from the next
-            for a in range(8):
-                for i in range(3):
-                    stored[k, a, i] = pull[a, i] if film else forces[e, a, i]

@@ -1,0 +1,167 @@
+"""Glue strength per saliva element: uniform, a profile across the mouth, or a CSV file.
+
+Positions across the mouth are s = −1 at the subject's right corner, 0 at the
+centre, +1 at the left corner (:attr:`visemeface.physics.face_model.FEMFace.saliva_s`).
+"""
+
+from __future__ import annotations
+
+import csv
+import re
+from pathlib import Path
+
+import numpy as np
+
+from visemeface.errors import InputError
+
+#: Seed 000 / 001 Table 1: the uniform glue and seed 001's central element's glue.
+GLUE = 0.08
+CENTRAL_GLUE = 0.18
+
+_ITEM = re.compile(r"^\s*([A-Za-z_]+|[-+]?\d*\.?\d+\s*\.\.\s*[-+]?\d*\.?\d+)\s*=\s*([^=]+?)\s*$")
+_NAMED = ("centre", "center", "left", "right", "corners", "all")
+
+
+def _positive_glue(text: str, spec: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise InputError(f"glue profile {spec!r}: {text!r} is not a number") from None
+    if not np.isfinite(v) or v < 0:
+        raise InputError(f"glue profile {spec!r}: glue must be >= 0, got {v}")
+    return v
+
+
+def parse_glue_profile(spec: str, s, base: float = GLUE) -> np.ndarray:
+    """Glue strength per saliva element from a profile across the mouth.
+
+    Parameters
+    ----------
+    spec : str
+        Comma-separated ``WHERE=VALUE`` items applied left to right over
+        ``base``. WHERE is ``all``; ``centre`` (the element(s) nearest the
+        mouth centre, ties included: seed 001's "central element");
+        ``left`` / ``right`` (the subject's left, s > 0 / right, s < 0);
+        ``corners`` (|s| ≥ 0.7); or a range ``a..b`` of s. A bare number sets
+        ``all``. Example: ``"centre=0.18"``, ``"left=0.2,-0.1..0.1=0"``.
+    s : (E,) array
+        Element-centre positions across the mouth, −1 at the right corner,
+        0 at the centre, +1 at the left corner.
+    base : float
+        Glue of elements no item names.
+
+    Raises
+    ------
+    InputError
+        Unparseable item, negative value, or an item naming no element.
+
+    Examples
+    --------
+    >>> parse_glue_profile("centre=0.18", np.array([-0.5, -0.1, 0.2, 0.6]))
+    array([0.08, 0.18, 0.08, 0.08])
+    """
+    s = np.asarray(s, dtype=np.float64)
+    glue = np.full(len(s), float(base))
+    spec = str(spec).strip()
+    if not spec:
+        raise InputError("empty glue profile")
+    for item in spec.split(","):
+        try:
+            glue[:] = _positive_glue(item, spec)
+            continue
+        except InputError:
+            pass
+        m = _ITEM.match(item)
+        if not m:
+            raise InputError(f"glue profile {spec!r}: cannot read {item.strip()!r} "
+                             "(expected WHERE=VALUE, WHERE one of centre, left, right, corners, all, a..b)")
+        where, value = m.group(1).strip().lower(), _positive_glue(m.group(2), spec)
+        if ".." in where:
+            a, b = sorted(float(x) for x in where.split(".."))
+            sel = (s >= a) & (s <= b)
+        elif where in ("centre", "center"):
+            d = np.abs(s)
+            sel = d <= d.min() + 1e-9 if len(s) else np.zeros(0, bool)
+        elif where == "left":
+            sel = s > 0
+        elif where == "right":
+            sel = s < 0
+        elif where == "corners":
+            sel = np.abs(s) >= 0.7
+        elif where == "all":
+            sel = np.ones(len(s), bool)
+        else:
+            from visemeface.errors import close_matches
+            raise InputError(f"glue profile {spec!r}: unknown place {where!r}" + close_matches(where, _NAMED))
+        if not sel.any():
+            raise InputError(f"glue profile {spec!r}: {item.strip()!r} names no saliva element "
+                             f"(elements span s = {s.min():.2f}..{s.max():.2f})")
+        glue[sel] = value
+    return glue
+
+
+def read_glue_file(path, s) -> np.ndarray:
+    """Glue per saliva element from a CSV file.
+
+    Two layouts (header line required):
+
+    * ``element,glue``: one row per element index (0-based, along the seam
+      from the subject's right corner); every element must be given.
+    * ``s,glue``: a profile across the mouth (s from −1, right corner, to +1,
+      left corner), linearly interpolated at the element centres ``s``.
+    """
+    path = Path(path)
+    s = np.asarray(s, dtype=np.float64)
+    try:
+        with open(path, newline="") as fh:
+            rows = list(csv.reader(fh))
+    except OSError as e:
+        raise InputError(f"cannot read glue file: {e.strerror}", path) from None
+    except (UnicodeDecodeError, csv.Error):
+        raise InputError("not a glue CSV file (not text)", path) from None
+    rows = [r for r in rows if r and any(c.strip() for c in r)]
+    if not rows:
+        raise InputError("empty glue file", path)
+    header = [c.strip().lower() for c in rows[0]]
+    if header not in (["element", "glue"], ["s", "glue"]):
+        raise InputError(f"header must be 'element,glue' or 's,glue', got {','.join(rows[0])!r}", path, 1)
+    keys, vals = [], []
+    for i, row in enumerate(rows[1:], start=2):
+        if len(row) != 2:
+            raise InputError(f"expected 2 columns, got {len(row)}", path, i)
+        try:
+            k, v = float(row[0]), float(row[1])
+        except ValueError:
+            raise InputError(f"not a number in {','.join(row)!r}", path, i) from None
+        if not np.isfinite(v) or v < 0:
+            raise InputError(f"glue must be >= 0, got {row[1].strip()}", path, i)
+        keys.append(k)
+        vals.append(v)
+    if not keys:
+        raise InputError("no glue values", path)
+    keys, vals = np.array(keys), np.array(vals)
+    if header[0] == "element":
+        idx = keys.astype(np.int64)
+        bad = (idx != keys) | (idx < 0) | (idx >= len(s))
+        if bad.any():
+            raise InputError(f"element {keys[bad][0]:g} names no saliva element (0..{len(s) - 1})", path)
+        glue = np.full(len(s), np.nan)
+        glue[idx] = vals
+        if np.isnan(glue).any():
+            raise InputError(f"missing elements {np.flatnonzero(np.isnan(glue))[:5].tolist()}", path)
+        return glue
+    order = np.argsort(keys)
+    return np.interp(s, keys[order], vals[order])
+
+
+def glue_per_element(s, glue: float = GLUE, profile: str | None = None,
+                     path: str | Path | None = None) -> np.ndarray:
+    """Combine the three ways of giving glue: uniform ``glue``, then a ``profile``, or a file."""
+    s = np.asarray(s, dtype=np.float64)
+    if not np.isfinite(glue) or glue < 0:
+        raise InputError(f"glue must be >= 0, got {glue}")
+    if path is not None:
+        return read_glue_file(path, s)
+    if profile:
+        return parse_glue_profile(profile, s, base=glue)
+    return np.full(len(s), float(glue))

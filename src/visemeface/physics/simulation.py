@@ -1,0 +1,311 @@
+"""The sticky-lip FEM face driven by an ActivationTrack: settings, model assembly, frames.
+
+:class:`StickySimulation` puts the parts together (issue 16): the face model's
+tissue, the muscle loads and the prescribed jaw of
+:class:`~visemeface.physics.drive.FaceDrive`, the saliva film on its own fine
+slabs (:class:`~visemeface.physics.film.SalivaFilm`), the force terms
+(:mod:`visemeface.physics.terms`) in one :class:`~visemeface.physics.integrator.FaceModel`,
+a :class:`~visemeface.physics.integrator.CentralDifference` integrator and one
+:class:`~visemeface.physics.state.SimState`. The lips are free: no spring
+pulls them toward the rig's posture and nothing knows where the seam is,
+unless ``posture_hz`` is asked for, and then it acts on every free node alike.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from visemeface.errors import InputError, close_matches
+from visemeface.physics.film import FILM_ELEMENTS, SalivaFilm
+from visemeface.physics.glue import GLUE, glue_per_element
+from visemeface.physics.openings import film_openings, seam_openings
+from visemeface.physics.saliva import SalivaParams
+from visemeface.physics.scenarios import track_values
+from visemeface.physics.state import SimState
+
+PHYSICS = ("sticky", "elastic")
+#: Least volume ratio J of a tissue element in the drive's target (see :meth:`FaceDrive.untangle`).
+MIN_JACOBIAN = 0.3
+#: Force terms that can be switched off (:mod:`visemeface.physics.terms`).
+TERMS = ("tissue", "muscles", "saliva", "drag", "posture")
+
+
+@dataclass(frozen=True)
+class PhysicsSettings:
+    """Solver and saliva settings (seed 000/001 Table 1 defaults).
+
+    ``glue`` is the uniform glue strength K_glue; ``glue_profile`` a profile
+    string (:func:`visemeface.physics.glue.parse_glue_profile`) applied over
+    it; ``glue_file`` a CSV (:func:`visemeface.physics.glue.read_glue_file`).
+    ``posture_hz`` (0 = off) adds the stabiliser m (2π f)² (U(t) − u) on every
+    free node alike; ``off`` names force terms to switch off (:data:`TERMS`).
+    ``film_elements``: least saliva slabs across the mouth. ``lip_bone``: the lips'
+    deep (bone-side) layer, their orbicularis, is moved along the muscle field like
+    the jaw's bone (``muscle``, default) or ``free``. Free, the upper lip follows the
+    glued lower one down at the centre and the seam tears at the corners first
+    (measured: scripts/sticky_figures.py --lip-bone free).
+    ``muscles``: ``active`` (the muscle field is the tissue's natural shape, an active
+    strain, :class:`~visemeface.physics.terms.ActiveTissue`) or ``loads`` (dead loads
+    F_int(U), :class:`~visemeface.physics.terms.MuscleLoads`).
+    ``min_jacobian`` bounds the target's volume ratio (:meth:`FaceDrive.untangle`);
+    ``field_smoothing`` averages the rig's surface field over quad neighbours.
+    """
+
+    dt: float = 1e-5
+    damping: float = 80.0
+    hourglass_kappa: float = 0.075
+    glue: float = GLUE
+    glue_profile: str | None = None
+    glue_file: str | None = None
+    saliva: SalivaParams = field(default_factory=SalivaParams)
+    posture_hz: float = 0.0
+    off: tuple = ()
+    film_elements: int = FILM_ELEMENTS
+    lip_bone: str = "muscle"
+    muscles: str = "active"
+    field_smoothing: int = 0
+    min_jacobian: float = MIN_JACOBIAN
+
+
+@dataclass
+class SimFrame:
+    """One output frame of :class:`StickySimulation`.
+
+    ``vertices`` are the face's vertices (FEM surface + kinematic rest of the
+    face), ``display`` the same with the rest gap drawn closed (to render),
+    ``displacement``/``velocity`` the FEM node state, ``saliva`` a dict of
+    per-frame saliva measures (see :meth:`StickySimulation.saliva_state`).
+    """
+
+    index: int
+    time: float
+    vertices: np.ndarray
+    display: np.ndarray
+    displacement: np.ndarray
+    velocity: np.ndarray
+    saliva: dict
+
+
+def _check_settings(physics: str, settings: PhysicsSettings) -> None:
+    if physics not in PHYSICS:
+        raise InputError(f"unknown physics {physics!r}" + close_matches(physics, PHYSICS)
+                         + f"; use one of {', '.join(PHYSICS)}")
+    if not (np.isfinite(settings.dt) and settings.dt > 0):
+        raise InputError(f"time step must be > 0, got {settings.dt}")
+    if not (np.isfinite(settings.posture_hz) and settings.posture_hz >= 0):
+        raise InputError(f"posture spring frequency must be >= 0, got {settings.posture_hz}")
+    if settings.muscles not in ("active", "loads"):
+        raise InputError(f"muscles must be 'active' or 'loads', got {settings.muscles!r}")
+    if settings.lip_bone not in ("free", "muscle"):
+        raise InputError(f"lip_bone must be 'free' or 'muscle', got {settings.lip_bone!r}")
+    for name in settings.off:
+        if name not in TERMS:
+            raise InputError(f"unknown force term {name!r}" + close_matches(name, TERMS)
+                             + f"; known: {', '.join(TERMS)}")
+
+
+def build_model(fem, drive, film, settings: PhysicsSettings, dt: float):
+    """The :class:`FaceModel` of a run: tissue solver, masses, boundary conditions, terms."""
+    from visemeface.physics import terms as T
+    from visemeface.physics.hexmesh import HexMesh
+    from visemeface.physics.integrator import FaceModel
+    from visemeface.physics.materials import SALIVA, SOFT_TISSUE
+    from visemeface.physics.tled import TLEDSolver
+
+    mesh = fem.mesh
+    # The whole mesh (tissue and the saliva hexahedra the film refines) once, for the
+    # stable time step and the lumped masses; the tissue alone for the step's forces.
+    whole = TLEDSolver(mesh, [SOFT_TISSUE, SALIVA], dt=dt, damping=settings.damping,
+                       hourglass_kappa=settings.hourglass_kappa)
+    tissue_mesh = HexMesh(mesh.nodes, mesh.hexes[fem.tissue], material=np.zeros(len(fem.tissue), np.int64))
+    tissue = TLEDSolver(tissue_mesh, SOFT_TISSUE, dt=dt, damping=settings.damping,
+                        hourglass_kappa=settings.hourglass_kappa)
+    free = np.ones((mesh.n_nodes, 3))
+    free[drive.fixed_nodes] = 0.0
+    free[drive.jaw_nodes] = 0.0
+    mass = whole.mass
+    active = settings.muscles == "active"
+    terms = {"tissue": T.ActiveTissue(tissue, drive, dt) if active else T.Tissue(tissue),
+             "muscles": T.MuscleLoads(drive, enabled=not active), "saliva": T.Saliva(film),
+             "drag": T.Drag(drive, (settings.damping * mass)[:, None] * free)}
+    if settings.posture_hz > 0:
+        k = (mass * (2.0 * np.pi * settings.posture_hz) ** 2)[:, None] * free
+        terms["posture"] = T.PostureSpring(drive, k)
+    for name in settings.off:
+        if name in terms:
+            terms[name].enabled = False
+    return FaceModel(tissue, mass, free, dt, settings.damping, drive.jaw_nodes, drive.jaw, terms)
+
+
+class StickySimulation:
+    """The FEM face with sticky (or elastic) lips driven by an ActivationTrack.
+
+    Parameters
+    ----------
+    fem : FEMFace
+    rig : MuscleRig
+        The rig on ``fem.face``.
+    track : DataFrame
+        ActivationTrack (docs/conventions.md): columns ``rig.names`` (missing
+        muscles count as 0), ``attrs["fps"]``.
+    physics : {"sticky", "elastic"}
+        ``elastic`` is the same FEM with no glue (K_glue = 0: saliva parts as
+        soon as it is stretched, still resists compression).
+    settings : PhysicsSettings
+
+    Notes
+    -----
+    The time step is the largest ``dt' ≤ settings.dt`` that divides a frame
+    (``1 / (fps · ceil(1 / (fps · dt)))``), so frames fall exactly on steps.
+    Everything is checked (dt against the stable limit, glue, moisture) when
+    the object is made, before any simulation time is spent.
+    """
+
+    def __init__(self, fem, rig, track: pd.DataFrame, physics: str = "sticky",
+                 settings: PhysicsSettings | None = None):
+        from visemeface.physics.drive import FaceDrive
+        from visemeface.physics.integrator import CentralDifference
+
+        settings = settings or PhysicsSettings()
+        _check_settings(physics, settings)
+        self.fem, self.rig, self.physics, self.settings = fem, rig, physics, settings
+        self.values, self.fps = track_values(track, rig)
+        self.steps_per_frame = int(np.ceil(1.0 / (self.fps * settings.dt) - 1e-9))
+        self.dt = 1.0 / (self.fps * self.steps_per_frame)
+        if physics == "elastic":
+            def glue(s):
+                return np.zeros(len(s))
+        else:
+            def glue(s):
+                return glue_per_element(s, settings.glue, settings.glue_profile, settings.glue_file)
+        mesh = fem.mesh
+        per_layer = len(fem.seam_pairs) - 1
+        self.film = SalivaFilm(mesh.nodes, mesh.hexes[fem.saliva], fem.seam_s[fem.saliva_pairs], glue,
+                               settings.saliva, across=per_layer, min_elements=settings.film_elements)
+        from visemeface.physics.hexmesh import HexMesh
+        from visemeface.physics.materials import SOFT_TISSUE
+        from visemeface.physics.tled import TLEDSolver
+        loads = TLEDSolver(HexMesh(mesh.nodes, mesh.hexes[fem.tissue], material=np.zeros(len(fem.tissue), np.int64)),
+                           SOFT_TISSUE, dt=min(self.dt, settings.dt), hourglass_kappa=settings.hourglass_kappa)
+        self.drive = FaceDrive(fem, rig, self.values, self.fps, loads.internal_forces,
+                               field_smoothing=settings.field_smoothing, min_jacobian=settings.min_jacobian,
+                               lip_bone=settings.lip_bone)
+        self.model = build_model(fem, self.drive, self.film, settings, self.dt)
+        self.integrator = CentralDifference(self.model)
+        self.state: SimState | None = None
+        self.rest_gaps = fem.rest_gaps
+
+    @property
+    def n_frames(self) -> int:
+        return len(self.values)
+
+    @property
+    def duration(self) -> float:
+        return (self.n_frames - 1) / self.fps
+
+    @property
+    def broken(self) -> np.ndarray:
+        """Broken flags of the film's slabs now."""
+        return self.state.saliva["broken"]
+
+    def saliva_state(self, vertices, u) -> dict:
+        """Per-frame saliva measures: broken fraction, openings along the seam (mesh) and the film."""
+        op = seam_openings(self.fem, vertices, self.rest_gaps)
+        film = film_openings(self.film, u, self.fem.mouth_width)
+        sal = self.state.saliva
+        return {"broken_fraction": float(sal["broken"].mean()), "open_count": op["count"],
+                "open_span": op["span"], "open_fraction": op["open_fraction"], "centre_gap": op["centre_gap"],
+                "max_stretch": float(np.minimum(sal["stretch"], 1e9).max()),
+                "film_open_count": film["count"], "film_open_span": film["span"]}
+
+    def initial_state(self) -> SimState:
+        """At rest in the first frame's posture (its equilibrium without glue): a track may start mid-gesture."""
+        u0 = self.drive.keyframe(0)[2] if np.any(self.values[0]) else None
+        state = self.integrator.start(u0)
+        state.saliva = self.film.initial_state(u0)
+        return state
+
+    def frames(self, start: dict | None = None):
+        """Simulate, yielding a :class:`SimFrame` per track frame.
+
+        Parameters
+        ----------
+        start : dict, optional
+            A checkpoint from :meth:`checkpoint`: continue after its frame.
+        """
+        spf = self.steps_per_frame
+        if start is None:
+            self.state, first = self.initial_state(), 0
+        else:
+            self.state = SimState.from_dict(start)
+            first = int(start["frame"]) + 1
+            if self.state.step != (first - 1) * spf or self.state.dt != self.dt:
+                raise InputError("the checkpoint's step does not match its frame")
+        # One step on a copy compiles (or loads) every kernel before the first frame, so an
+        # interrupt never lands in numba's compiler; the step's caches are pure functions of time.
+        self.integrator.step(self.state.copy())
+        if start is not None:
+            self.integrator.advance(self.state, spf)
+        for k in range(first, self.n_frames):
+            if k > first:
+                self.integrator.advance(self.state, spf)
+            yield self._frame(k)
+
+    def _frame(self, k: int) -> SimFrame:
+        st = self.state
+        base = self.rig.pose(self.values[k])
+        verts = self.fem.surface(st.u, base)
+        return SimFrame(k, k / self.fps, verts, self.fem.display_vertices(verts, self.rest_gaps), st.u.copy(),
+                        st.velocity, self.saliva_state(verts, st.u))
+
+    def checkpoint(self, frame: SimFrame) -> dict:
+        """Everything :meth:`frames` needs to continue after ``frame`` (the state as the frame was made)."""
+        if self.state is None or self.state.step != frame.index * self.steps_per_frame:
+            raise ValueError("checkpoint() takes the frame the simulation has just produced")
+        return {"frame": frame.index, **self.state.to_dict(), "fingerprint": self.fingerprint()}
+
+    def fingerprint(self) -> str:
+        """A digest of the model, track and settings: a checkpoint only resumes the same run."""
+        import hashlib
+        h = hashlib.sha256()
+        for arr in (self.fem.mesh.nodes, self.fem.mesh.hexes, self.values, self.film.glue):
+            h.update(np.ascontiguousarray(arr).tobytes())
+        s = self.settings
+        h.update(repr((self.physics, self.fps, self.dt, s.damping, s.hourglass_kappa, s.saliva, s.posture_hz,
+                       tuple(s.off), s.film_elements, s.lip_bone, s.muscles, s.field_smoothing, s.min_jacobian)).encode())
+        return h.hexdigest()[:16]
+
+
+def physics_face(face, rig=None, fem=None):
+    """(fem, rig) for a face: the FEM model and a rig on the same face (built if not given)."""
+    from visemeface.muscles.rig import MuscleRig
+    from visemeface.physics.face_model import build_fem_face
+
+    if fem is None:
+        fem = build_fem_face(face)
+    if rig is None:
+        rig = MuscleRig.from_file(face)
+    return fem, rig
+
+
+def simulate_track(face, rig, track: pd.DataFrame, physics: str = "sticky",
+                   settings: PhysicsSettings | None = None, fem=None, states: list | None = None):
+    """Animate ``track`` on the FEM face: an iterator of float32 (N, 3) display vertices per track row.
+
+    The kinematic path's drop-in for ``--physics sticky|elastic`` (lips' rest gap
+    drawn closed, :meth:`FEMFace.display_vertices`). All input checks run before
+    the first frame. ``states``, if given, collects each frame's saliva measures.
+    """
+    fem, rig = physics_face(face, rig, fem)
+    sim = StickySimulation(fem, rig, track, physics=physics, settings=settings)
+
+    def frames():
+        for fr in sim.frames():
+            if states is not None:
+                states.append({"frame": fr.index, "time": fr.time, **fr.saliva})
+            yield fr.display.astype(np.float32)
+
+    return frames()

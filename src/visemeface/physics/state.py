@@ -1,0 +1,65 @@
+"""The simulation's whole state: one object that checkpoints and restores exactly.
+
+The central-difference integrator (:mod:`visemeface.physics.integrator`) needs
+``u(tⁿ)`` and ``u(tⁿ⁻¹)`` (not a velocity: rebuilding ``u(tⁿ⁻¹)`` from a
+velocity by a Taylor step is off by round-off and more), the step count ``n``
+(time ``tⁿ = n Δt`` from one integer, so a resumed run sees the very same
+floating-point times) and the saliva film's per-slab state
+(:class:`~visemeface.physics.film.SalivaFilm`). A :class:`SimState` saved after
+a frame and restored continues bit for bit as if never stopped.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+#: The film's state arrays (:meth:`SalivaFilm.initial_state`) and their dtypes.
+SALIVA_KEYS = {"broken": np.bool_, "dry": np.bool_, "stored": np.float64, "stretch": np.float64}
+
+
+@dataclass
+class SimState:
+    """u, u_prev, step (t = step · dt) and the saliva film's state.
+
+    Attributes
+    ----------
+    u, u_prev : (n, 3) float64
+        Node displacements at steps ``step`` and ``step − 1``.
+    step : int
+    dt : float
+    saliva : dict of arrays
+        ``broken``, ``dry``, ``stored`` (E, 8, 3), ``stretch`` per film slab.
+    """
+
+    u: np.ndarray
+    u_prev: np.ndarray
+    step: int
+    dt: float
+    saliva: dict = field(default_factory=dict)
+
+    @property
+    def t(self) -> float:
+        return self.step * self.dt
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """Backward-difference velocity (u − u_prev) / dt."""
+        return (self.u - self.u_prev) / self.dt
+
+    def copy(self) -> SimState:
+        return SimState(self.u.copy(), self.u_prev.copy(), int(self.step), float(self.dt),
+                        {k: v.copy() for k, v in self.saliva.items()})
+
+    def to_dict(self) -> dict:
+        """Plain arrays and numbers (``np.savez`` without pickle keeps every bit)."""
+        out = {"u": self.u.copy(), "u_prev": self.u_prev.copy(), "step": int(self.step), "dt": float(self.dt)}
+        out.update({f"saliva_{k}": v.copy() for k, v in self.saliva.items()})
+        return out
+
+    @classmethod
+    def from_dict(cls, d: dict) -> SimState:
+        saliva = {k: np.array(d[f"saliva_{k}"], dtype=t) for k, t in SALIVA_KEYS.items() if f"saliva_{k}" in d}
+        return cls(np.array(d["u"], dtype=np.float64), np.array(d["u_prev"], dtype=np.float64),
+                   int(d["step"]), float(d["dt"]), saliva)

@@ -1,0 +1,51 @@
+"""Plain-numpy reference of the saliva film's compiled rule (:func:`visemeface.physics.film._film_step`).
+
+Only the tests use it: the simulation runs the compiled rule alone.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from visemeface.physics import saliva as sv
+
+
+def reference_step(film, u, t: float, state: dict) -> np.ndarray:
+    """One step of every slab of ``film`` at node displacements ``u``: the nodal forces (n, 3).
+
+    Updates ``state`` (``broken``, ``dry``, ``stored``, ``stretch``) like the compiled rule.
+    """
+    p = film.params
+    ue = film.slab_displacement(u)
+    F = sv.deformation_gradient(ue, film.cgrads)
+    Q = sv.stretch_across(F, film.axis)
+    pull, push, _ = sv.film_forces(ue, film.axis, film.grads, film.volumes, film.modulus)
+    state["stretch"][:] = Q
+    Q = np.where(np.linalg.det(F) > 0.0, Q, 1e300)
+    C = np.swapaxes(F, 1, 2) @ F
+    strain = np.abs(C - np.eye(3)).max(axis=(1, 2))
+    Z = film.breaking_points(t)
+    broken, dry, stored = state["broken"], state["dry"], state["stored"]
+    back = dry & (Q >= 1.0) & (Q < 1e300)
+    dry &= ~back
+    broken &= ~back
+    squeezed = (Q < p.squeeze) | dry
+    broken &= ~((Q <= 1.0) & (strain <= p.rebond_strain) & ~squeezed)
+    newly = ~broken & (Q >= Z) & ~squeezed
+    stored[newly] = pull[newly]
+    if p.soften > 0:                                   # cohesive softening with the stretch
+        fac = np.clip(1.0 - (np.sqrt(np.minimum(Q, 1e30)) - np.sqrt(Z)) / p.soften, 0.0, 1.0)
+    else:
+        stored[broken & ~squeezed] *= p.decay
+        fac = np.ones(len(Q))
+    out = pull + push
+    out[broken] = stored[broken] * fac[broken, None, None] + push[broken]
+    broken |= newly | squeezed
+    dry |= squeezed
+    stored[squeezed] = 0.0
+    out[squeezed] = 0.0
+    nodal = np.zeros((len(u), 3))
+    w = film.w[..., None]
+    np.add.at(nodal, film.n0, (1.0 - w) * out)
+    np.add.at(nodal, film.n1, w * out)
+    return nodal
