@@ -38,6 +38,18 @@ def _wait_for_a_frame(work, tag, proc, timeout=120):
     raise AssertionError("no frame finished in time")
 
 
+def _same_as_an_uninterrupted_run(folder, tag):
+    """The resumed run's outputs are the very bytes of a run never interrupted (the simulation restarts exactly)."""
+    ref = folder.parent / f"{folder.name}_reference"
+    ref.mkdir()
+    proc = _start(ref, tag)
+    assert proc.wait(timeout=240) == 0, proc.communicate()[1]
+    got, want = _files(folder), _files(ref)
+    assert sorted(got) == sorted(want)
+    for name in want:
+        assert got[name] == want[name], f"{name} differs from the uninterrupted run"
+
+
 def test_simulate_with_every_output_finishes_every_time(tmp_path):
     """Starting the video encoder after numba's thread pool once hung 1 run in 3 (TBB's fork handler)."""
     for k in range(5):
@@ -73,6 +85,7 @@ def test_an_interrupt_ends_simulate_within_two_seconds_and_resume_completes(tmp_
     assert proc.returncode == 0, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cut.mp4", "cut.mp4.json", "cut.pc2", "cut.saliva.csv",
                                                           "cut_fr", "cut_fr.json"]
+    _same_as_an_uninterrupted_run(tmp_path, "cut")
 
 
 def test_after_a_kill_the_next_run_resumes_and_removes_what_the_killed_one_left(tmp_path):
@@ -87,6 +100,7 @@ def test_after_a_kill_the_next_run_resumes_and_removes_what_the_killed_one_left(
     assert proc.returncode == 0, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["k.mp4", "k.mp4.json", "k.pc2", "k.saliva.csv",
                                                           "k_fr", "k_fr.json"]
+    _same_as_an_uninterrupted_run(tmp_path, "k")
     assert not any(p.name.startswith(".") for p in (tmp_path / "k_fr").iterdir() if p.name != ".visemeface-frames.json")
 
 
