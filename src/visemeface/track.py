@@ -37,6 +37,7 @@ import numpy as np
 import pandas as pd
 
 from visemeface.errors import InputError
+from visemeface.textfile import read_text
 from visemeface.outputs import atomic_output
 
 #: Frames forgiven by the roundings of the frame clock (see the module docstring).
@@ -162,12 +163,7 @@ def load_track(path) -> pd.DataFrame:
         (with its line), times not increasing, no frame rate.
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise InputError("track not found", path) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read track: {exc}", path) from None
+    text = read_text(path, "track")
     lines = text.splitlines()
     fps, skip = _header_fps(lines, path)
     rows = list(csv.reader(lines[skip:]))

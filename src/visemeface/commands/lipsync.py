@@ -36,6 +36,7 @@ def add_text_arguments(g) -> None:
 def text_of(recording: Path, text, text_file, quiet: bool = False):
     """The words for ``recording``: ``text``, the file's, a same-named .txt beside it, or None."""
     from visemeface.errors import InputError
+    from visemeface.textfile import read_text
 
     if text is not None and text_file is not None:
         raise InputError("--text and --text-file both give the words; give one")
@@ -47,12 +48,7 @@ def text_of(recording: Path, text, text_file, quiet: bool = False):
     path = text_file if text_file is not None else (beside if beside.is_file() else None)
     if path is None:
         return None, None
-    try:
-        words = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise InputError("text file not found", path) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read the text file ({exc.__class__.__name__})", path) from None
+    words = read_text(path, "text file")
     if text_file is None and not quiet:
         import sys
 

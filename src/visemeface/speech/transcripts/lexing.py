@@ -6,24 +6,11 @@ import math
 import re
 
 from visemeface.errors import InputError
+from visemeface.textfile import decode  # noqa: F401  (the readers' decoding rule; its home)
 
 BRACKETS = re.compile(r"\[[^\[\]]*\]")
 TEXT_OUTSIDE_BRACKETS = re.compile(r"[^\s\[\]]")
 _COMMENT = re.compile(r"(^|\s)[#;].*$")
-
-
-def decode(raw: bytes, path) -> str:
-    """Text of a transcript file: UTF-16 with a byte-order mark, else UTF-8 (BOM allowed)."""
-    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
-        try:
-            return raw.decode("utf-16")
-        except UnicodeDecodeError:
-            raise InputError("not valid UTF-16 text", path) from None
-    try:
-        return raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        line = raw[:exc.start].count(b"\n") + 1
-        raise InputError(f"not UTF-8 text (byte 0x{raw[exc.start]:02x})", path, line) from None
 
 
 def strip_comment(line: str) -> str:

@@ -1,0 +1,40 @@
+"""Reading a user's text file: one decoding rule and one set of messages for every reader.
+
+UTF-16 with a byte-order mark, else UTF-8 (a byte-order mark allowed); a file that is
+neither, a folder, a missing or unreadable file is an :class:`~visemeface.errors.InputError`
+naming the file (and the line of a bad byte).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from visemeface.errors import InputError
+
+
+def decode(raw: bytes, path=None) -> str:
+    """Text of a file's bytes: UTF-16 with a BOM, else UTF-8 (BOM allowed)."""
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        try:
+            return raw.decode("utf-16")
+        except UnicodeDecodeError:
+            raise InputError("not valid UTF-16 text", path) from None
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = raw[:exc.start].count(b"\n") + 1
+        raise InputError(f"not UTF-8 text (byte 0x{raw[exc.start]:02x})", path, line) from None
+
+
+def read_text(path, what: str = "file") -> str:
+    """The text of ``path``; ``what`` names the file in the messages ("track not found")."""
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise InputError(f"{what} not found", path) from None
+    except IsADirectoryError:
+        raise InputError(f"{what} expected, got a folder", path) from None
+    except OSError as exc:
+        raise InputError(f"cannot read the {what} ({exc.strerror or exc.__class__.__name__})", path) from None
+    return decode(raw, path)
