@@ -16,7 +16,7 @@ For every GRID clip in the realdata folder (default ``../shared/realdata``; see 
    audio's speech span (:func:`speech_correlation`, the figure ``lipsync_acceptance.py`` prints
    too); ``--out DIR`` also writes both profiles and an overlay plot.
 
-Run: ``python scripts/compare_realdata.py [--realdata DIR] [--timing align|grid] [--out DIR]``
+Run: ``python scripts/compare_realdata.py [--realdata DIR] [--timing align|grid] [--out DIR] [--per-phone]``
 
 The GRID clips are the GRID corpus's (Cooke, Barker, Cunningham & Shao, JASA 120:2421, 2006).
 """
@@ -148,6 +148,28 @@ def timed_segments(video: Path, text: str, timing: str, duration: float):
         return text_to_utterance(text, audio=wav, warn=False).segments, "audio span"
 
 
+def phone_heights(real, synth, segments, span_s) -> list[tuple[str, float, float]]:
+    """(phone, real height, our height) for every frame inside ``span_s`` that a phone (not ``_``) covers."""
+    rows = []
+    for t, hr, hs in zip(real["time"], real["height"], synth["height"]):
+        at = segments[(segments["start"] <= t) & (segments["end"] > t)]
+        if span_s[0] <= t <= span_s[1] and len(at) and at["phoneme"].iloc[0] != "_":
+            rows.append((str(at["phoneme"].iloc[0]), float(hr), float(hs)))
+    return rows
+
+
+def print_phone_table(rows) -> None:
+    """Mean opening height (mouth widths) per phone, real vs ours, pooled over the clips."""
+    import pandas as pd
+
+    df = pd.DataFrame(rows, columns=["phone", "real", "ours"])
+    table = df.groupby("phone").agg(frames=("real", "size"), real=("real", "mean"), ours=("ours", "mean"),
+                                    real_open=("real", lambda x: float((x > 0).mean())))
+    table["ours_minus_real"] = table["ours"] - table["real"]
+    print("opening height per aligned phone over the speech spans (mouth widths), all clips pooled:")
+    print(table.sort_values("ours_minus_real").round(3).to_string())
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--realdata", type=Path, default=ROOT.parent / "shared" / "realdata")
@@ -155,6 +177,8 @@ def main() -> None:
                     help="align: forced alignment of the text to the clip's audio (default); grid: the "
                          "word alignment file, else the text stretched onto the speech span")
     ap.add_argument("--out", type=Path, help="also write <clip>_real.csv, <clip>_synth.csv, <clip>.png here")
+    ap.add_argument("--per-phone", action="store_true",
+                    help="also print the mean opening height per aligned phone, real vs ours")
     args = ap.parse_args()
 
     import warnings
@@ -167,6 +191,7 @@ def main() -> None:
     detector = OpeningDetector()
     if args.out:
         args.out.mkdir(parents=True, exist_ok=True)
+    rows = []
     for video in sorted(args.realdata.glob("*.mpg")):
         clip = video.stem
         text = grid_sentence(clip)
@@ -176,6 +201,7 @@ def main() -> None:
         d = l2_distance(real, synth)
         c = correlation(real, synth, max_lag=5)
         sp = speech_correlation(real, synth, video)
+        rows += phone_heights(real, synth, segments, sp["span_s"])
         print(json.dumps({"clip": clip, "text": text, "timing": timing, "frames": n,
                           "open_frames_real": int((real["count"] > 0).sum()),
                           "open_frames_synth": int((synth["count"] > 0).sum()),
@@ -191,6 +217,8 @@ def main() -> None:
             plot_profiles({f"{clip} real": real, f"synthetic (shifted {-c['lag_s']:+.2f} s)":
                            shifted_profile(synth, c["lag_s"])}, args.out / f"{clip}.png",
                           metrics=("count", "area", "width", "height"), title=f'"{text}"', force=True)
+    if args.per_phone:
+        print_phone_table(rows)
 
 
 if __name__ == "__main__":
