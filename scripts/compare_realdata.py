@@ -3,17 +3,20 @@
 For every GRID clip in the realdata folder (default ``../shared/realdata``; see its README):
 
 1. the sentence is spelled from the file name by the GRID grammar (``swwp2s`` = "set white with p
-   two soon") and turned into timed phonemes (``g2p.text_to_utterance``); where a word alignment
-   exists (``<clip>.align``: ``start end word``, 1/25000 s) the phonemes are mapped piecewise
-   linearly onto it (word by word), otherwise the speech is stretched onto the clip's audio
-   (``g2p``'s speech span, which issue 15 replaces with a noise-floor detector);
+   two soon") and timed (``--timing``): ``align`` (default) force-aligns it to the clip's own audio
+   (:func:`visemeface.speech.align.utterance_from_audio`, phone by phone); ``grid`` keeps the older
+   timing: ``g2p.text_to_utterance`` mapped piecewise linearly onto the word alignment where one
+   exists (``<clip>.align``: ``start end word``, 1/25000 s), else stretched onto the audio's
+   speech span (:func:`visemeface.speech.audio.speech_span`, relative to the noise floor);
 2. the default face is animated at the clip's 25 fps and rendered (256 x 256, mouth view);
 3. real and synthetic frames are analysed with the same :class:`OpeningDetector` settings (the
    real clip with the automatic mouth box, the render with the renderer's box);
 4. the figures of ``visemeface compare`` are printed: L2 distance, Pearson r per metric, the best
-   lag within +-5 frames and r there; ``--out DIR`` also writes both profiles and an overlay plot.
+   lag within +-5 frames and r there, over the whole clip; and the opening-height r over the
+   audio's speech span (:func:`speech_correlation`, the figure ``lipsync_acceptance.py`` prints
+   too); ``--out DIR`` also writes both profiles and an overlay plot.
 
-Run: ``python scripts/compare_realdata.py [--realdata DIR] [--out DIR]``
+Run: ``python scripts/compare_realdata.py [--realdata DIR] [--timing align|grid] [--out DIR] [--per-phone]``
 
 The GRID clips are the GRID corpus's (Cooke, Barker, Cunningham & Shao, JASA 120:2421, 2006).
 """
@@ -96,54 +99,126 @@ def synthetic_profile(segments, fps: float, n_frames: int, detector):
     return analyze_frames(frames, box, fps, detector, source="synthetic")
 
 
+def real_profile(video: Path, detector=None):
+    """The real clip's profile (automatic mouth box), its fps and frame count."""
+    from visemeface.analysis.mouthbox import track_mouth
+    from visemeface.analysis.openings import OpeningDetector
+    from visemeface.analysis.profiles import analyze_frames
+    from visemeface.analysis.video import open_frames
+
+    source = open_frames(video)
+    frames = list(source.frames())
+    detector = detector or OpeningDetector()
+    return analyze_frames(frames, track_mouth(frames, source=video.stem), source.fps, detector,
+                          source=video.stem), source.fps, len(frames)
+
+
+def speech_correlation(real, synth, video: Path, max_lag: int = 5) -> dict:
+    """Opening-height Pearson r of two profiles over the audio's speech span, at lag 0 and the best lag.
+
+    The span is :func:`visemeface.speech.audio.speech_span` of the clip's audio (relative to its noise
+    floor); both profiles are cut to it before :func:`~visemeface.analysis.profiles.correlation`.
+    Returns ``{"span_s": (t0, t1), "r": r at lag 0, "lag": frames, "r_lag": r there}``.
+    """
+    from visemeface.analysis.profiles import correlation
+    from visemeface.speech.audio import read_audio, speech_span
+
+    samples, rate = read_audio(video)
+    t0, t1 = speech_span(samples, rate)
+    cut = [df[(df["time"] >= t0) & (df["time"] <= t1)].reset_index(drop=True) for df in (real, synth)]
+    for df, whole in zip(cut, (real, synth)):
+        df.attrs.update(whole.attrs)
+    c = correlation(*cut, columns=("height",), max_lag=max_lag)
+    return {"span_s": (round(t0, 2), round(t1, 2)), "r": c["r"]["height"], "lag": c["lag"], "r_lag": c["r_lag"]}
+
+
+def timed_segments(video: Path, text: str, timing: str, duration: float):
+    """The sentence's timed phonemes: forced to the clip's audio (``align``) or the older ``grid`` timing."""
+    from visemeface.speech.g2p import text_to_utterance
+
+    if timing == "align":
+        from visemeface.speech.align import utterance_from_audio
+        return utterance_from_audio(video, text).segments, "forced alignment"
+    align = video.with_suffix(".align")
+    if align.exists():
+        return aligned_utterance(text_to_utterance(text, warn=False), read_align(align), duration), "GRID .align"
+    with tempfile.TemporaryDirectory() as tmp:
+        wav = Path(tmp) / "a.wav"
+        extract_audio(video, wav)
+        return text_to_utterance(text, audio=wav, warn=False).segments, "audio span"
+
+
+def phone_heights(real, synth, segments, span_s) -> list[tuple[str, float, float]]:
+    """(phone, real height, our height) for every frame inside ``span_s`` that a phone (not ``_``) covers."""
+    rows = []
+    for t, hr, hs in zip(real["time"], real["height"], synth["height"]):
+        at = segments[(segments["start"] <= t) & (segments["end"] > t)]
+        if span_s[0] <= t <= span_s[1] and len(at) and at["phoneme"].iloc[0] != "_":
+            rows.append((str(at["phoneme"].iloc[0]), float(hr), float(hs)))
+    return rows
+
+
+def print_phone_table(rows) -> None:
+    """Mean opening height (mouth widths) per phone, real vs ours, pooled over the clips."""
+    import pandas as pd
+
+    df = pd.DataFrame(rows, columns=["phone", "real", "ours"])
+    table = df.groupby("phone").agg(frames=("real", "size"), real=("real", "mean"), ours=("ours", "mean"),
+                                    real_open=("real", lambda x: float((x > 0).mean())))
+    table["ours_minus_real"] = table["ours"] - table["real"]
+    print("opening height per aligned phone over the speech spans (mouth widths), all clips pooled:")
+    print(table.sort_values("ours_minus_real").round(3).to_string())
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--realdata", type=Path, default=ROOT.parent / "shared" / "realdata")
+    ap.add_argument("--timing", choices=("align", "grid"), default="align",
+                    help="align: forced alignment of the text to the clip's audio (default); grid: the "
+                         "word alignment file, else the text stretched onto the speech span")
     ap.add_argument("--out", type=Path, help="also write <clip>_real.csv, <clip>_synth.csv, <clip>.png here")
+    ap.add_argument("--per-phone", action="store_true",
+                    help="also print the mean opening height per aligned phone, real vs ours")
     args = ap.parse_args()
 
-    from visemeface.analysis.mouthbox import track_mouth
-    from visemeface.analysis.openings import OpeningDetector
-    from visemeface.analysis.profiles import analyze_frames, correlation, l2_distance, plot_profiles, \
-        shifted_profile, write_profile
-    from visemeface.analysis.video import open_frames
-    from visemeface.speech.g2p import text_to_utterance
+    import warnings
 
+    from visemeface.analysis.openings import OpeningDetector
+    from visemeface.analysis.profiles import correlation, l2_distance, plot_profiles, shifted_profile, \
+        write_profile
+
+    warnings.simplefilter("ignore")
     detector = OpeningDetector()
     if args.out:
         args.out.mkdir(parents=True, exist_ok=True)
+    rows = []
     for video in sorted(args.realdata.glob("*.mpg")):
         clip = video.stem
         text = grid_sentence(clip)
-        source = open_frames(video)
-        frames = list(source.frames())
-        real = analyze_frames(frames, track_mouth(frames, source=clip), source.fps, detector, source=clip)
-        duration = len(frames) / source.fps
-        align = video.with_suffix(".align")
-        if align.exists():
-            segments = aligned_utterance(text_to_utterance(text, warn=False), read_align(align), duration)
-            timing = "alignment"
-        else:
-            with tempfile.TemporaryDirectory() as tmp:
-                wav = Path(tmp) / "a.wav"
-                extract_audio(video, wav)
-                segments = text_to_utterance(text, audio=wav, warn=False).segments
-            timing = "audio span"
-        synth = synthetic_profile(segments, source.fps, len(frames), detector)
+        real, fps, n = real_profile(video, detector)
+        segments, timing = timed_segments(video, text, args.timing, n / fps)
+        synth = synthetic_profile(segments, fps, n, detector)
         d = l2_distance(real, synth)
         c = correlation(real, synth, max_lag=5)
-        print(json.dumps({"clip": clip, "text": text, "timing": timing, "frames": len(frames),
+        sp = speech_correlation(real, synth, video)
+        rows += phone_heights(real, synth, segments, sp["span_s"])
+        print(json.dumps({"clip": clip, "text": text, "timing": timing, "frames": n,
                           "open_frames_real": int((real["count"] > 0).sum()),
                           "open_frames_synth": int((synth["count"] > 0).sum()),
                           "l2": {k: round(v, 4) for k, v in d.items()},
                           "r": {k: round(v, 3) for k, v in c["r"].items()},
-                          "best_lag_frames": c["lag"], "r_height_at_lag": round(c["r_lag"], 3)}), flush=True)
+                          "best_lag_frames": c["lag"], "r_height_at_lag": round(c["r_lag"], 3),
+                          "speech_s": sp["span_s"], "r_height_speech": round(sp["r"], 3),
+                          "best_lag_speech": sp["lag"], "r_height_speech_at_lag": round(sp["r_lag"], 3)}),
+              flush=True)
         if args.out:
             write_profile(real, args.out / f"{clip}_real.csv", force=True)
             write_profile(synth, args.out / f"{clip}_synth.csv", force=True)
             plot_profiles({f"{clip} real": real, f"synthetic (shifted {-c['lag_s']:+.2f} s)":
                            shifted_profile(synth, c["lag_s"])}, args.out / f"{clip}.png",
                           metrics=("count", "area", "width", "height"), title=f'"{text}"', force=True)
+    if args.per_phone:
+        print_phone_table(rows)
 
 
 if __name__ == "__main__":

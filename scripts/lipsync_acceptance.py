@@ -8,23 +8,29 @@
    frames where our face, animated from the aligned transcript, has its lips closed.
 3. Without text (phone recognition): phone error rate against the aligned phones, and whether
    each real closure still meets a recognised /p b m/.
-4. Pearson correlation of our opening height with the real one over the speech span. The real
-   one is measured here (:func:`real_opening`): in a strip 11 px wide at the mouth centre, the
-   rows between the first and last lip row that are not lip (teeth, tongue, dark gap).
+4. Pearson correlation of our opening height with the real one over the audio's speech span,
+   by ``compare_realdata.py``'s :func:`speech_correlation`: the real clip and our face (animated
+   from the aligned transcript and rendered) analysed by the project's opening detector with the
+   same settings (the real clip with the automatic mouth box), at lag 0 and the best lag within
+   +-5 frames. (Until this refresh the real height came from a redness strip at a hand-placed mouth
+   centre and ours from the mesh: two different measures; now one.)
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from compare_realdata import real_profile, speech_correlation, synthetic_profile  # noqa: E402
 TEXTS = {"swwp2s": "set white with p two soon", "bbaf2n": "bin blue at f two now",
          "lbax4n": "lay blue at x four now"}
-#: Mouth centre (x, y) in the 360x288 frames, read off frame 0 of each clip.
+#: Mouth centre (x, y) in the 360x288 frames, read off frame 0 of each clip (for ``--sheet``).
 CENTRES = {"swwp2s": (175, 214), "bbaf2n": (160, 216), "lbax4n": (193, 205)}
 #: Real closures for /b p m/, frames (25 fps, first and last closed frame), labelled by eye from the
 #: mouth contact sheets (``--sheet``): "p" of "p two"; "b" of "bin", "m b" of "bin blue"; "b" of "blue".
@@ -41,29 +47,6 @@ def frames_of(path: Path) -> np.ndarray:
     meta = next(gen)
     w, h = meta["size"]
     return np.array([np.frombuffer(f, np.uint8).reshape(h, w, 3) for f in gen])
-
-
-def real_opening(frames: np.ndarray, centre) -> np.ndarray:
-    """Rows of teeth, tongue or dark gap between the lips at the mouth centre, per frame.
-
-    In a strip 11 px wide and 32 px high at the mouth centre, each row has a redness
-    ``R / (R + G + B)`` and a brightness. Per clip, the skin is the strip's top four rows
-    (median over the frames) and the lips the 90th percentile of redness; a row is lip when
-    its redness is over ``skin + 0.35 (lip - skin)`` and it is not dark (brightness over half
-    the skin's). The opening is the number of non-lip rows between the first and the last lip row.
-    """
-    x, y = centre
-    strips = frames[:, y - 16:y + 16, x - 5:x + 6].astype(float).mean(axis=2)
-    red = strips[..., 0] / np.maximum(strips.sum(axis=2), 1)
-    value = strips.mean(axis=2)
-    skin_red, skin_value = float(np.median(red[:, :4])), float(np.median(value[:, :4]))
-    threshold = skin_red + 0.35 * (float(np.percentile(red, 90)) - skin_red)
-    lip = (red >= threshold) & (value > 0.5 * skin_value)
-    out = []
-    for row in lip:
-        rows = np.flatnonzero(row)
-        out.append(0 if rows.size < 2 else int(np.sum(~row[rows[0]:rows[-1] + 1])))
-    return np.array(out, float)
 
 
 def our_opening(utterance, rig, n_frames: int) -> np.ndarray:
@@ -143,7 +126,7 @@ def main() -> int:
 
     from visemeface.muscles.rig import default_rig
     from visemeface.speech.align import utterance_from_audio
-    from visemeface.speech.audio import read_audio, speech_span
+    from visemeface.analysis.openings import OpeningDetector
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--realdata", type=Path, default=ROOT.parent / "shared" / "realdata")
@@ -151,11 +134,12 @@ def main() -> int:
     args = ap.parse_args()
     warnings.simplefilter("ignore")
     rig = default_rig()
+    detector = OpeningDetector()
     figures = {}
     aligned = {c: utterance_from_audio(args.realdata / f"{c}.mpg", t) for c, t in TEXTS.items()}
     figures["word_boundary_mean_ms"] = round(word_table(args.realdata, aligned["swwp2s"]) * 1000, 1)
     print(f"{'clip':7} {'closures (real / ours, frames)':40} {'release':>7} {'both':>5} {'no-text':>8} {'PER':>5} "
-          f"{'Pearson':>8}")
+          f"{'Pearson':>8} {'lag':>4} {'r@lag':>6}")
     met_all, release_all, loop_all, per_all = [], [], [], []
     for clip, text in TEXTS.items():
         frames = frames_of(args.realdata / f"{clip}.mpg")
@@ -167,18 +151,20 @@ def main() -> int:
         ref = [p for p in aligned[clip].segments.phoneme if p != "_"]
         hyp = [p for p in recognised.segments.phoneme if p != "_"]
         per = edit_distance(ref, hyp) / len(ref)
-        samples, rate = read_audio(args.realdata / f"{clip}.mpg")
-        t0, t1 = speech_span(samples, rate)
-        span = slice(int(t0 * FPS), int(np.ceil(t1 * FPS)))
-        r = float(np.corrcoef(ours[span], real_opening(frames, CENTRES[clip])[span])[0, 1])
+        real, fps, n = real_profile(args.realdata / f"{clip}.mpg", detector)
+        synth = synthetic_profile(aligned[clip].segments, fps, n, detector)
+        sp = speech_correlation(real, synth, args.realdata / f"{clip}.mpg")
+        r = sp["r"]
         ours_near = [run for run in runs if any(abs(run[1] - b) <= 4 for _, b in CLOSURES[clip])]
         print(f"{clip:7} {str(CLOSURES[clip]) + ' / ' + str(ours_near):40} {sum(release):>5}/{len(met)} "
-              f"{sum(met):>3}/{len(met)} {sum(loop_met):>6}/{len(loop_met)} {per:5.0%} {r:8.2f}")
+              f"{sum(met):>3}/{len(met)} {sum(loop_met):>6}/{len(loop_met)} {per:5.0%} {r:8.2f} {sp['lag']:>4} "
+              f"{sp['r_lag']:6.2f}")
         met_all += met
         release_all += release
         loop_all += loop_met
         per_all.append(per)
         figures[f"pearson_{clip}"] = round(r, 2)
+        figures[f"pearson_{clip}_best_lag"] = [sp["lag"], round(sp["r_lag"], 2)]
     figures.update(closures_within_1_frame=f"{sum(met_all)}/{len(met_all)}",
                    releases_within_1_frame=f"{sum(release_all)}/{len(release_all)}",
                    closures_found_without_text=f"{sum(loop_all)}/{len(loop_all)}",

@@ -1,18 +1,17 @@
 #!/usr/bin/env python
 """Side by side: each real GRID clip of ``../shared/realdata`` and our face saying the same sentence.
 
-For every clip the sentence is timed by ``text_to_utterance(sentence)`` and stretched
-linearly onto the clip's speech span: the word alignment's first and last word where the
-clip has one (``swwp2s.align``), else the span where the real mouth moves (frame-to-frame
-change of the mouth cut-out above a third of its largest, smoothed over 5 frames; the
-audio's own speech span, ``say --audio``, is thrown by the clips' noise: 0.0-2.97 s).
-It is animated at the clip's 25 fps and rendered in the mouth view. Eight frames evenly over
-the speech span are shown: the real mouth (cut out around a mouth centre found by eye in
-each clip, :data:`CLIPS`) above our render at the same time, cut to the same mouth-width
-fraction. The project's own opening analysis (:func:`visemeface.analysis.profiles.analyze_frames`,
-Otsu threshold with teeth counted as opening) runs on both, and the L2 distance of the
-per-frame opening width and height profiles (in mouth widths) is printed as JSON lines,
-with the fractions of each tile that are teeth and dark cavity (:mod:`visemeface.render.mouth_pixels`).
+For every clip the sentence is timed as ``compare_realdata.py`` times it (forced alignment of
+the text to the clip's audio, :func:`compare_realdata.timed_segments`), animated at the clip's
+25 fps and rendered in the mouth view. Eight frames evenly over the audio's speech span
+(:func:`visemeface.speech.audio.speech_span`, relative to the noise floor) are shown: the real
+mouth (cut out around a mouth centre found by eye in each clip, :data:`CLIPS`, for the picture
+only) above our render at the same time, cut to the same mouth-width fraction. The figures are
+``compare_realdata.py``'s: the project's opening analysis with the same settings on both (the real
+clip with the automatic mouth box, the render with the renderer's), the means, L2 distance and
+Pearson r of the opening width, height and area (in mouth widths) over the speech span, the height's
+best lag within +-5 frames (:func:`compare_realdata.speech_correlation`), and the fractions of each
+tile that are teeth and dark cavity (:mod:`visemeface.render.mouth_pixels`), printed as JSON lines.
 
 Usage::
 
@@ -63,56 +62,21 @@ def crop(img: np.ndarray, centre, mouth_w: float) -> np.ndarray:
     return cv2.resize(part, TILE, interpolation=cv2.INTER_CUBIC)
 
 
-def speech_span(path: Path, frames, centre, mouth_w) -> tuple[float, float]:
-    """The clip's speech span (s): its word alignment, else where the mouth moves (see the docstring)."""
-    align = path.with_suffix(".align")
-    if align.exists():
-        rows = [line.split() for line in align.read_text().splitlines() if line.strip()]
-        words = [(int(a) / 25000, int(b) / 25000) for a, b, w in rows if w != "sil"]
-        return words[0][0], words[-1][1]
-    grey = [cv2.cvtColor(crop(f, centre, mouth_w), cv2.COLOR_RGB2GRAY).astype(np.float32) for f in frames]
-    energy = np.array([0.0] + [np.abs(b - a).mean() for a, b in zip(grey, grey[1:])])
-    energy = np.convolve(energy, np.ones(5) / 5, mode="same")
-    moving = np.flatnonzero(energy > energy.max() / 3)
-    return moving[0] / FPS, (moving[-1] + 1) / FPS
-
-
-def stretched(utt, t0: float, t1: float):
-    """The utterance's segments with the speech moved linearly onto [t0, t1]."""
-    seg = utt.segments.copy()
-    speech = seg[seg.phoneme != "_"]
-    s0, s1 = float(speech.start.min()), float(speech.end.max())
-    f = lambda t: np.clip(t0 + (np.asarray(t, float) - s0) * (t1 - t0) / (s1 - s0), 0.0, None)  # noqa: E731
-    seg["start"], seg["end"] = f(seg["start"]), f(seg["end"])
-    seg.loc[seg.index[0], "start"] = 0.0
-    seg.loc[seg.index[-1], "end"] = max(float(seg["end"].iloc[-1]), 3.0)
-    return seg
-
-
-def our_frames(sentence: str, span, n_frames: int):
+def our_frames(segments, n_frames: int):
+    """Our face along ``segments`` at :data:`FPS`, rendered (mouth view): frames, tile centre, width, box."""
     from visemeface.muscles.rig import default_rig
     from visemeface.postures.library import load_visemes
     from visemeface.render.renderer import Renderer
-    from visemeface.speech.g2p import text_to_utterance
     from visemeface.speech.timeline import activation_track
 
     rig = default_rig()
-    utt = text_to_utterance(sentence, warn=False)
-    track = activation_track(stretched(utt, *span), load_visemes(rig=rig), fps=FPS)
+    track = activation_track(segments, load_visemes(rig=rig), fps=FPS)
     poses = rig.poses(track)
     r = Renderer(rig.face, size=(256, 256), view="mouth")
-    x, y, w, h = r.mouth_box()
+    x, y, w, h = box = r.mouth_box()
     frames = [r.render(poses[min(i, len(poses) - 1)]) for i in range(n_frames)]
     r.release()
-    return frames, (x + w / 2, y + h * 0.45), w
-
-
-def opening_profile(frames, centre, mouth_w):
-    from visemeface.analysis.openings import OpeningDetector
-    from visemeface.analysis.profiles import analyze_frames
-
-    box = (int(centre[0] - mouth_w / 2), int(centre[1] - 0.6 * mouth_w), int(mouth_w), int(1.2 * mouth_w))
-    return analyze_frames(frames, box, FPS, detector=OpeningDetector(teeth=True))
+    return frames, (x + w / 2, y + h * 0.45), w, box
 
 
 def interior_fractions(real, ours, centre, mouth_w, our_centre, our_w, span) -> dict:
@@ -137,19 +101,34 @@ def main(argv=None) -> int:
     ap.add_argument("-o", "--output", type=Path, default=Path("docs/images/realdata.png"))
     ap.add_argument("--force", action="store_true")
     args = ap.parse_args(argv)
+    import warnings
+
+    from visemeface.analysis.openings import OpeningDetector
+    from visemeface.analysis.profiles import analyze_frames
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from compare_realdata import real_profile, speech_correlation, timed_segments
+
+    warnings.simplefilter("ignore")
+    detector = OpeningDetector()
     tiles, labels = [], []
     for name, sentence, centre, mouth_w in CLIPS:
-        real = read_clip(args.realdata / f"{name}.mpg")
-        t0, t1 = speech_span(args.realdata / f"{name}.mpg", real, centre, mouth_w)
-        ours, our_centre, our_w = our_frames(sentence, (t0, t1), len(real))
+        path = args.realdata / f"{name}.mpg"
+        real = read_clip(path)
+        pr, _, _ = real_profile(path, detector)
+        segments, _ = timed_segments(path, sentence, "align", len(real) / FPS)
+        ours, our_centre, our_w, our_box = our_frames(segments, len(real))
+        po = analyze_frames(ours, our_box, FPS, detector, source="synthetic")
+        sp = speech_correlation(pr, po, path)
+        t0, t1 = sp["span_s"]
         idx = np.linspace(t0 * FPS, t1 * FPS - 1, SHOWN).round().astype(int)
         for row, (frames, c, w, who) in enumerate(((real, centre, mouth_w, "real"), (ours, our_centre, our_w, "ours"))):
             for i in idx:
                 tiles.append(crop(frames[i], c, w))
                 labels.append(f"{name} {who} {i / FPS:.2f}s")
-        pr, po = opening_profile(real, centre, mouth_w), opening_profile(ours, our_centre, our_w)
-        span = slice(int(t0 * FPS), int(t1 * FPS))
-        out = {"clip": name, "sentence": sentence, "speech_s": [round(t0, 2), round(t1, 2)]}
+        span = slice(int(np.ceil(t0 * FPS - 1e-9)), int(t1 * FPS + 1e-9) + 1)
+        out = {"clip": name, "sentence": sentence, "speech_s": [t0, t1],
+               "corr_height_best_lag": [sp["lag"], round(sp["r_lag"], 2)]}
         for k in ("width", "height", "area"):
             a, b = pr[k].to_numpy()[span], po[k].to_numpy()[span]
             out[f"real_{k}_mean"], out[f"ours_{k}_mean"] = round(float(a.mean()), 3), round(float(b.mean()), 3)
