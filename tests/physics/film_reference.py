@@ -10,7 +10,7 @@ import numpy as np
 from visemeface.physics import saliva as sv
 
 
-def reference_step(film, u, t: float, state: dict) -> np.ndarray:
+def reference_step(film, u, t: float, state: dict, dt: float = 1e-5) -> np.ndarray:
     """One step of every slab of ``film`` at node displacements ``u``: the nodal forces (n, 3).
 
     Updates ``state`` (``broken``, ``dry``, ``stored``, ``stretch``) like the compiled rule.
@@ -19,8 +19,18 @@ def reference_step(film, u, t: float, state: dict) -> np.ndarray:
     ue = film.slab_displacement(u)
     F = sv.deformation_gradient(ue, film.cgrads)
     Q = sv.stretch_across(F, film.axis)
-    pull, push, _ = sv.film_forces(ue, film.axis, film.grads, film.volumes, film.modulus)
+    flow = state["flow"]
+    lq = np.sqrt(Q)
+    flow[:] = np.minimum(flow, np.maximum(lq - 1.0, 0.0))       # the film fills the gap
+    pull, push, _ = sv.film_forces(ue, film.axis, film.grads, film.volumes, film.modulus, flow)
     state["stretch"][:] = Q
+    le = np.maximum(lq - flow, 1.0)
+    if p.fluidity > 0:                                          # Stefan flow of the intact film
+        go = ~state["broken"] & ~state["dry"] & (lq > 1.0)
+        h = p.film_thickness + flow * film.thickness
+        rate = 0.5 * film.modulus * (le * le - 1.0) * le * h ** 3 * p.fluidity / (4 * film.band ** 2 * film.thickness)
+        flow[go] = np.minimum(flow + dt * rate, lq - 1.0)[go]
+    Qe = np.where(flow == 0.0, Q, (lq - flow) ** 2)
     Q = np.where(np.linalg.det(F) > 0.0, Q, 1e300)
     C = np.swapaxes(F, 1, 2) @ F
     strain = np.abs(C - np.eye(3)).max(axis=(1, 2))
@@ -31,7 +41,7 @@ def reference_step(film, u, t: float, state: dict) -> np.ndarray:
     broken &= ~back
     squeezed = (Q < p.squeeze) | dry
     broken &= ~((Q <= 1.0) & (strain <= p.rebond_strain) & ~squeezed)
-    newly = ~broken & (Q >= Z) & ~squeezed
+    newly = ~broken & ((Qe >= Z) | (Q >= 1e300)) & ~squeezed
     stored[newly] = pull[newly]
     if p.soften > 0:                                   # cohesive softening with the stretch
         fac = np.clip(1.0 - (np.sqrt(np.minimum(Q, 1e30)) - np.sqrt(Z)) / p.soften, 0.0, 1.0)
