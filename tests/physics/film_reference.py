@@ -21,16 +21,18 @@ def reference_step(film, u, t: float, state: dict, dt: float = 1e-5) -> np.ndarr
     Q = sv.stretch_across(F, film.axis)
     flow = state["flow"]
     lq = np.sqrt(Q)
-    flow[:] = np.minimum(flow, np.maximum(lq - 1.0, 0.0))       # the film fills the gap
+    flow[state["broken"] | state["dry"]] = 0.0
     pull, push, _ = sv.film_forces(ue, film.axis, film.grads, film.volumes, film.modulus, flow)
     state["stretch"][:] = Q
-    le = np.maximum(lq - flow, 1.0)
+    x = lq - flow
     if p.fluidity > 0:                                          # Stefan flow of the intact film
-        go = ~state["broken"] & ~state["dry"] & (lq > 1.0)
+        go = ~state["broken"] & ~state["dry"]
         h = p.film_thickness + flow * film.thickness
-        rate = 0.5 * film.modulus * (le * le - 1.0) * le * h ** 3 * p.fluidity / (4 * film.band ** 2 * film.thickness)
-        flow[go] = np.minimum(flow + dt * rate, lq - 1.0)[go]
-    Qe = np.where(flow == 0.0, Q, (lq - flow) ** 2)
+        sig = sv._film_stress(x, film.modulus)
+        f = flow + dt * sig * h ** 3 * p.fluidity / (4 * film.band ** 2 * film.thickness)
+        f = np.where(sig > 0, np.minimum(f, lq - 1.0), np.maximum(np.maximum(f, lq - 1.0), 0.0))
+        flow[go] = f[go]
+    Qe = np.where(flow == 0.0, Q, x * x)
     Q = np.where(np.linalg.det(F) > 0.0, Q, 1e300)
     C = np.swapaxes(F, 1, 2) @ F
     strain = np.abs(C - np.eye(3)).max(axis=(1, 2))

@@ -467,18 +467,21 @@ def test_evaporation_makes_a_later_opening_unzip_sooner(model):
 
 
 @pytest.mark.slow
-def test_resume_from_a_checkpoint_continues_the_run(model):
+@pytest.mark.parametrize("viscosity", [np.inf, 3.0])
+def test_resume_from_a_checkpoint_continues_the_run(model, viscosity):
     fem, rig = model
     track = _ramp(rig, fps=200, hold=0.0, ramp=0.05)
-    sim = drive.StickySimulation(fem, rig, track)
+    settings = drive.PhysicsSettings(saliva=drive.SalivaParams(viscosity=viscosity))
+    sim = drive.StickySimulation(fem, rig, track, settings=settings)
     full = list(sim.frames())
-    sim2 = drive.StickySimulation(fem, rig, track)
+    assert (sim.state.saliva["flow"] > 0).any() == np.isfinite(viscosity)
+    sim2 = drive.StickySimulation(fem, rig, track, settings=settings)
     it = sim2.frames()
     for fr in it:
         if fr.index == 5:
             ck = sim2.checkpoint(fr)
             break
-    sim3 = drive.StickySimulation(fem, rig, track)
+    sim3 = drive.StickySimulation(fem, rig, track, settings=settings)
     rest = list(sim3.frames(ck))
     assert [f.index for f in rest] == [f.index for f in full[6:]]
     for a, b in zip(rest, full[6:]):                      # exact: the state is (u, u_prev, step, film)
@@ -493,6 +496,10 @@ def test_bad_physics_input_is_refused_before_simulating(model):
         drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(dt=1e-3))
     with pytest.raises(InputError, match="names no saliva element"):
         drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(glue_profile="0.95..0.99=1"))
+    with pytest.raises(InputError, match="saliva viscosity must be > 0"):
+        drive.SalivaParams(viscosity=0.0)
+    with pytest.raises(InputError, match="film thickness must be > 0"):
+        drive.SalivaParams(film_thickness=float("nan"))
     with pytest.raises(InputError, match="unknown physics 'stiky'"):
         drive.StickySimulation(fem, rig, track, physics="stiky")
     bad = track.copy()
@@ -626,3 +633,34 @@ def test_simulate_never_overwrites_a_users_json_next_to_the_video(tmp_path, monk
     assert main(["simulate", "part", "--size", "64", "-q"]) == 2
     assert "--force" in capsys.readouterr().err
     assert (tmp_path / "part.mp4.json").read_text() == "mine"
+
+
+def test_viscous_film_flows_at_stefans_rate_instead_of_breaking():
+    # Held at a stretch under its breaking point, a solid film (viscosity ∞) keeps its
+    # pull; a viscous one thickens at Stefan's rate dh/dt = σ h³ / (4 η b²) and its pull
+    # relaxes to nothing, without breaking (a liquid bridge thins, it does not snap).
+    eta, dt = 0.02, 1e-5
+    solid, X, s_st = _films(0.08)
+    fluid, _, f_st = _films(0.08, sv.SalivaParams(viscosity=eta))
+    F = _stretched(_box(), np.sqrt(1.05))[0]
+    f0, _ = _step(solid, X, s_st, F)
+    g0, _ = _step(fluid, X, f_st, F)
+    np.testing.assert_allclose(g0, f0, rtol=1e-12)                 # the same pull at the first step
+    lam = np.sqrt(1.05)
+    sigma = 0.5 * fluid.modulus * (lam * lam - 1.0) * lam
+    h0, b, H = fluid.params.film_thickness, fluid.band[0], fluid.thickness[0]
+    assert b == pytest.approx(0.0015) and H == pytest.approx(0.0005)   # half the box's depth, its height
+    np.testing.assert_allclose(f_st["flow"][0] * H, dt * sigma * h0 ** 3 / (4 * eta * b * b), rtol=1e-12)
+    for _ in range(3000):
+        f, _ = _step(solid, X, s_st, F)
+        g, _ = _step(fluid, X, f_st, F)
+    np.testing.assert_allclose(f, f0, rtol=1e-12)
+    assert np.abs(g).max() < 0.05 * np.abs(f0).max()
+    assert not f_st["broken"].any() and not s_st["broken"].any()
+    assert f_st["flow"][0] == pytest.approx(lam - 1.0, rel=0.05)   # it took up the whole stretch
+    # Brought back together, the thickened film pushes and is squeezed out by the same law.
+    g, _ = _step(fluid, X, f_st, np.eye(3))
+    assert g[:, 1] @ np.sign(X[:, 1]) < 0.0                         # it pushes the lips apart
+    for _ in range(20000):
+        _step(fluid, X, f_st, np.eye(3))
+    assert 0.0 <= f_st["flow"][0] < 0.1 * (lam - 1.0)

@@ -171,7 +171,7 @@ from numba import njit  # noqa: E402
 @njit(inline="always", cache=True)
 def _pull_push(k, uv, n, grads, volumes, modulus, lc, flow, pull, push):  # pragma: no cover - compiled
     """Slab k's film forces at its two points into ``pull`` (λ ≥ 1) and ``push`` (λ < 1) (see film_forces);
-    stretched, the film's elastic stretch is λ − ``flow`` (what viscous flow has not taken up)."""
+    its elastic stretch is λ − ``flow`` (what viscous flow has not taken up)."""
     for gp in range(2):
         f0, f1, f2 = n[0], n[1], n[2]
         for a in range(8):
@@ -180,17 +180,17 @@ def _pull_push(k, uv, n, grads, volumes, modulus, lc, flow, pull, push):  # prag
             f1 += uv[a, 1] * gn
             f2 += uv[a, 2] * gn
         lam = np.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
-        if lam >= 1.0:
-            le = max(lam - flow, 1.0)
-            dw = 0.5 * modulus * (le * le - 1.0) * le
-        elif lam >= lc:
-            dw = modulus * (1.0 - 1.0 / lam)
+        x = lam - flow                         # the elastic stretch
+        if x >= 1.0:
+            dw = 0.5 * modulus * (x * x - 1.0) * x
+        elif x >= lc:
+            dw = modulus * (1.0 - 1.0 / x)
         else:
-            dw = modulus * (1.0 - 1.0 / lc) + modulus / (lc * lc) * (lam - lc)
+            dw = modulus * (1.0 - 1.0 / lc) + modulus / (lc * lc) * (x - lc)
         c = dw / max(lam, 1e-12) * volumes[k, gp]
         for a in range(8):
             gn = (grads[k, gp, a, 0] * n[0] + grads[k, gp, a, 1] * n[1] + grads[k, gp, a, 2] * n[2]) * c
-            if lam >= 1.0:
+            if x >= 1.0:
                 pull[a, 0] += gn * f0
                 pull[a, 1] += gn * f1
                 pull[a, 2] += gn * f2
@@ -236,16 +236,24 @@ def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, st
             fi = F[i, 0] * n[0] + F[i, 1] * n[1] + F[i, 2] * n[2]
             Q += fi * fi
         lq = np.sqrt(Q)
-        flow[k] = min(flow[k], max(lq - 1.0, 0.0))    # the film fills the gap: it cannot have flowed wider
+        if broken[k] or dry[k]:
+            flow[k] = 0.0                          # no liquid layer to flow: a re-formed film starts afresh
         _pull_push(k, uv, n, grads, volumes, modulus, lc, flow[k], pull, push)
         stretch[k] = Q
-        le = max(lq - flow[k], 1.0)                # the film's elastic stretch
-        if fluidity > 0.0 and not broken[k] and not dry[k] and lq > 1.0:
-            # Stefan flow: the film thickens at dh/dt = σ h³ / (4 η b²) (b: half its band across the lips)
+        x = lq - flow[k]                           # the film's elastic stretch at its centre
+        if fluidity > 0.0 and not broken[k] and not dry[k]:
+            # Stefan flow: the film thickens (σ > 0) or is squeezed (σ < 0) at dh/dt = σ h³ / (4 η b²),
+            # b half its band across the lips; it relaxes toward x = 1 and never past it
             h = h0 + flow[k] * thick[k]
-            sig = 0.5 * modulus * (le * le - 1.0) * le
-            flow[k] = min(flow[k] + dt * sig * h * h * h * fluidity / (4.0 * band[k] * band[k] * thick[k]), lq - 1.0)
-        Qe = Q if flow[k] == 0.0 else (lq - flow[k]) * (lq - flow[k])
+            if x >= 1.0:
+                sig = 0.5 * modulus * (x * x - 1.0) * x
+            elif x >= lc:
+                sig = modulus * (1.0 - 1.0 / x)
+            else:
+                sig = modulus * (1.0 - 1.0 / lc) + modulus / (lc * lc) * (x - lc)
+            f = flow[k] + dt * sig * h * h * h * fluidity / (4.0 * band[k] * band[k] * thick[k])
+            flow[k] = min(f, lq - 1.0) if sig > 0.0 else max(f, lq - 1.0, 0.0)
+        Qe = Q if flow[k] == 0.0 else x * x
         J = (F[0, 0] * (F[1, 1] * F[2, 2] - F[1, 2] * F[2, 1]) - F[0, 1] * (F[1, 0] * F[2, 2] - F[1, 2] * F[2, 0])
              + F[0, 2] * (F[1, 0] * F[2, 1] - F[1, 1] * F[2, 0]))
         if J <= 0.0:

@@ -110,13 +110,15 @@ class SalivaParams:
         series with the squeeze-film flow of a liquid layer of thickness h between the
         lips over a band 2b across them (Stefan's law, plane flow),
 
-        .. math:: \dot h = \frac{\sigma\,h^3}{4\,\eta\,b^2},\qquad h = h_0 + \delta_{flow},
+        dh/dt = σ h³ / (4 η b²),   h = h₀ + δ_flow,
 
         σ the film's stress across the lips, b half the slab's depth, h₀
         ``film_thickness``. Flow relaxes the pull and gives no break, so lips pulled
         slowly part by flow (slowly at first: h³), pulled fast they still break at Z
-        (on the elastic stretch). The film fills the gap: its flowed part never
-        exceeds the lips' separation. The state's ``flow`` is δ_flow / slab thickness.
+        (on the elastic stretch). Lips brought back together squeeze the thickened film
+        out by the same law (σ < 0), so a flowed film pushes until it has thinned; flow
+        relaxes toward zero elastic stress and never past it. The state's ``flow`` is
+        δ_flow / slab thickness.
     film_thickness : float
         h₀ (m), the real saliva film's thickness (seed 000 §3.4.2: 0.07–0.1 mm).
     """
@@ -230,11 +232,11 @@ FILM_STIFF_STRETCH = 0.5
 
 
 def _film_stress(lam, modulus, lc=FILM_STIFF_STRETCH, flow=0.0):
-    """dW/dλ of the film (see :func:`film_forces`); stretched, at the elastic stretch max(λ − flow, 1)."""
-    le = np.maximum(lam - flow, 1.0)
-    return np.where(lam >= 1.0, 0.5 * modulus * (le * le - 1.0) * le,
-                    np.where(lam >= lc, modulus * (1.0 - 1.0 / np.maximum(lam, lc)),
-                             modulus * (1.0 - 1.0 / lc) + modulus / lc ** 2 * (lam - lc)))
+    """dW/dλ of the film (see :func:`film_forces`) at the elastic stretch x = λ − flow."""
+    x = lam - flow
+    return np.where(x >= 1.0, 0.5 * modulus * (x * x - 1.0) * x,
+                    np.where(x >= lc, modulus * (1.0 - 1.0 / np.maximum(x, lc)),
+                             modulus * (1.0 - 1.0 / lc) + modulus / lc ** 2 * (x - lc)))
 
 
 #: Natural coordinate ξ of the film's two integration points along the seam.
@@ -296,7 +298,7 @@ def film_forces(u, axis, grads, volumes, modulus, flow=None):
     modulus : float
     flow : (E,) array or None
         Stretch taken up by the film's viscous flow (:attr:`SalivaParams.viscosity`):
-        stretched, the film's elastic stretch is max(λ − flow, 1).
+        the film's elastic stretch is x = λ − flow (x ≥ 1 pulls, x < 1 pushes).
 
     Returns
     -------
@@ -312,8 +314,8 @@ def film_forces(u, axis, grads, volumes, modulus, flow=None):
     lam = np.sqrt(Q)
     fl = 0.0 if flow is None else np.asarray(flow, dtype=np.float64)[:, None]
     c = _film_stress(lam, modulus, flow=fl) / np.maximum(lam, 1e-12) * volumes      # (E, 2)
-    pull = np.einsum("eg,ega,egi->eai", np.where(lam >= 1.0, c, 0.0), g, Fn)
-    push = np.einsum("eg,ega,egi->eai", np.where(lam < 1.0, c, 0.0), g, Fn)
+    pull = np.einsum("eg,ega,egi->eai", np.where(lam - fl >= 1.0, c, 0.0), g, Fn)
+    push = np.einsum("eg,ega,egi->eai", np.where(lam - fl < 1.0, c, 0.0), g, Fn)
     return pull, push, Q
 
 

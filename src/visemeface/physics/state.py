@@ -61,5 +61,7 @@ class SimState:
     @classmethod
     def from_dict(cls, d: dict) -> SimState:
         saliva = {k: np.array(d[f"saliva_{k}"], dtype=t) for k, t in SALIVA_KEYS.items() if f"saliva_{k}" in d}
+        if "stretch" in saliva and "flow" not in saliva:      # a checkpoint from before the film could flow
+            saliva["flow"] = np.zeros_like(saliva["stretch"])
         return cls(np.array(d["u"], dtype=np.float64), np.array(d["u_prev"], dtype=np.float64),
                    int(d["step"]), float(d["dt"]), saliva)
