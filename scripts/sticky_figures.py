@@ -40,6 +40,8 @@ from visemeface.physics import drive
 from visemeface.physics.face_model import build_fem_face
 
 IMAGES = Path(__file__).resolve().parents[1] / "docs" / "images"
+#: Seconds the jaw takes to open in the zipper and glue-0.3 figures (``--ramp``).
+RAMP = 0.25
 
 
 def emit(**kw):
@@ -112,7 +114,7 @@ def video_zipper(fem, runs, fps):
 
 
 def fig_zipper(fem, rig, fps, common):
-    tr = drive.ramp_track(rig.names, fps, 0.02, 0.25, 0.08, 0.35)
+    tr = drive.ramp_track(rig.names, fps, 0.02, RAMP, 0.08, 0.35)
     runs = {}
     for name, physics, extra in (("sticky", "sticky", {}), ("elastic", "elastic", {}), ("glue0", "sticky", {"glue": 0.0}),
                                  ("sticky_no_drag", "sticky", {"off": ("drag",)})):
@@ -140,7 +142,7 @@ def fig_merge(fem, rig, fps, common):
 
 
 def fig_glue03(fem, rig, fps, common, runs):
-    tr = drive.ramp_track(rig.names, fps, 0.02, 0.25, 0.08, 0.35)
+    tr = drive.ramp_track(rig.names, fps, 0.02, RAMP, 0.08, 0.35)
     sim, frames = run(fem, rig, tr, "sticky", glue=0.3, **common)
     m = zipper_measures(sim, frames, fps)
     ref = zipper_measures(*runs["sticky"], fps) if runs else {}
@@ -230,6 +232,9 @@ def main():
     ap.add_argument("--muscles", choices=("active", "loads"), default="active")
     ap.add_argument("--soften", type=float, default=0.0,
                     help="cohesive softening stretch of a broken film (0: the seed's 0.99-a-step decay)")
+    ap.add_argument("--viscosity", type=float, default=float("inf"),
+                    help="saliva viscosity, Pa s, for its Stefan flow (inf: the seed's solid film that does not flow)")
+    ap.add_argument("--ramp", type=float, default=0.25, help="zipper/glue03: seconds the jaw takes to open")
     ap.add_argument("--posture-hz", type=float, default=0.0, help="uniform posture spring (Hz, 0 = none)")
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--visemes", default=None, help="calibration: comma-separated DECtalk symbols (default all)")
@@ -241,9 +246,12 @@ def main():
     only = set(args.only.split(","))
     from visemeface.physics.saliva import SalivaParams
     common = {"lip_bone": args.lip_bone, "posture_hz": args.posture_hz, "muscles": args.muscles}
-    if args.soften:
-        common["saliva"] = SalivaParams(soften=args.soften)
-    emit(figure="settings", resolution=args.resolution, fps=args.fps, soften=args.soften,
+    if args.soften or np.isfinite(args.viscosity):
+        common["saliva"] = SalivaParams(soften=args.soften, viscosity=args.viscosity)
+    global RAMP
+    RAMP = args.ramp
+    emit(figure="settings", resolution=args.resolution, fps=args.fps, soften=args.soften, viscosity=args.viscosity,
+         ramp=args.ramp,
          **{k: v for k, v in common.items() if k != "saliva"})
     if "counts" in only:
         sim = drive.StickySimulation(fem, rig, drive.ramp_track(rig.names, args.fps, 0.0, 0.02, 0.0, 0.1))

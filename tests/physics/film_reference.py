@@ -10,7 +10,7 @@ import numpy as np
 from visemeface.physics import saliva as sv
 
 
-def reference_step(film, u, t: float, state: dict) -> np.ndarray:
+def reference_step(film, u, t: float, state: dict, dt: float = 1e-5) -> np.ndarray:
     """One step of every slab of ``film`` at node displacements ``u``: the nodal forces (n, 3).
 
     Updates ``state`` (``broken``, ``dry``, ``stored``, ``stretch``) like the compiled rule.
@@ -19,8 +19,20 @@ def reference_step(film, u, t: float, state: dict) -> np.ndarray:
     ue = film.slab_displacement(u)
     F = sv.deformation_gradient(ue, film.cgrads)
     Q = sv.stretch_across(F, film.axis)
-    pull, push, _ = sv.film_forces(ue, film.axis, film.grads, film.volumes, film.modulus)
+    flow = state["flow"]
+    lq = np.sqrt(Q)
+    flow[state["broken"] | state["dry"]] = 0.0
+    pull, push, _ = sv.film_forces(ue, film.axis, film.grads, film.volumes, film.modulus, flow)
     state["stretch"][:] = Q
+    x = lq - flow
+    if p.fluidity > 0:                                          # Stefan flow of the intact film
+        go = ~state["broken"] & ~state["dry"]
+        h = p.film_thickness + flow * film.thickness
+        sig = sv._film_stress(x, film.modulus)
+        f = flow + dt * sig * h ** 3 * p.fluidity / (4 * film.band ** 2 * film.thickness)
+        f = np.where(sig > 0, np.minimum(f, lq - 1.0), np.maximum(np.maximum(f, lq - 1.0), 0.0))
+        flow[go] = f[go]
+    Qe = np.where(flow == 0.0, Q, x * x)
     Q = np.where(np.linalg.det(F) > 0.0, Q, 1e300)
     C = np.swapaxes(F, 1, 2) @ F
     strain = np.abs(C - np.eye(3)).max(axis=(1, 2))
@@ -31,7 +43,7 @@ def reference_step(film, u, t: float, state: dict) -> np.ndarray:
     broken &= ~back
     squeezed = (Q < p.squeeze) | dry
     broken &= ~((Q <= 1.0) & (strain <= p.rebond_strain) & ~squeezed)
-    newly = ~broken & (Q >= Z) & ~squeezed
+    newly = ~broken & ((Qe >= Z) | (Q >= 1e300)) & ~squeezed
     stored[newly] = pull[newly]
     if p.soften > 0:                                   # cohesive softening with the stretch
         fac = np.clip(1.0 - (np.sqrt(np.minimum(Q, 1e30)) - np.sqrt(Z)) / p.soften, 0.0, 1.0)

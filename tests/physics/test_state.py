@@ -12,7 +12,7 @@ from visemeface.physics.state import SimState
 def test_state_round_trips_through_npz_bit_for_bit():
     rng = np.random.default_rng(1)
     saliva = {"broken": rng.random(7) > 0.5, "dry": rng.random(7) > 0.8, "stored": rng.normal(size=(7, 8, 3)),
-              "stretch": rng.random(7) + 1.0}
+              "stretch": rng.random(7) + 1.0, "flow": rng.random(7) * 0.1}
     st = SimState(rng.normal(size=(20, 3)), rng.normal(size=(20, 3)), 12345, 1.0 / 60 / 1667, saliva)
     buf = io.BytesIO()
     np.savez(buf, **st.to_dict())

@@ -17,7 +17,8 @@ does virtual work on the tissue exactly as it stores energy.
 The per-slab rule (stretch, breaking, decay, contact, re-bond, squeeze) is
 :func:`_film_step`, written once and compiled; its plain-numpy reference is in
 ``tests/physics/film_reference.py``. The film's state (``broken``, ``dry``,
-``stored``, ``stretch``) lives in the simulation's
+``stored``, ``stretch``, ``flow``: the stretch taken up by the saliva's viscous
+flow, :attr:`~visemeface.physics.saliva.SalivaParams.viscosity`) lives in the simulation's
 :class:`~visemeface.physics.state.SimState`, not here.
 """
 
@@ -99,6 +100,11 @@ class SalivaFilm:
         grads, vols = film_gradients(self.X)
         self.grads, self.volumes = np.ascontiguousarray(grads), np.ascontiguousarray(vols)
         self.modulus = SALIVA.p_wave_modulus
+        #: Each slab's thickness across the lips (its η extent) and half its band through them (ζ extent / 2):
+        #: the lengths of the Stefan flow (:attr:`SalivaParams.viscosity`).
+        X = self.X
+        self.thickness = np.linalg.norm(X[:, [3, 2, 7, 6]].mean(1) - X[:, [0, 1, 4, 5]].mean(1), axis=1)
+        self.band = 0.5 * np.linalg.norm(X[:, [4, 5, 6, 7]].mean(1) - X[:, [0, 1, 2, 3]].mean(1), axis=1)
         self._Z0 = self.breaking_points(0.0)
         self.rest_gap = self.front_gaps(np.zeros((len(nodes), 3)))
         self._compile()
@@ -111,7 +117,8 @@ class SalivaFilm:
         p = self.params
         _film_step(z, z.copy(), self.n0[:0], self.n1[:0], self.w[:0], self.cgrads[:0], self.grads[:0],
                    self.volumes[:0], self.axis[:0], self._Z0[:0], st["broken"], st["dry"], st["stored"],
-                   st["stretch"], p.decay, p.rebond_strain, p.squeeze, self.modulus, FILM_STIFF_STRETCH, p.soften)
+                   st["stretch"], p.decay, p.rebond_strain, p.squeeze, self.modulus, FILM_STIFF_STRETCH, p.soften,
+                   st["flow"], self.thickness[:0], self.band[:0], p.film_thickness, p.fluidity, 1e-5)
 
     @property
     def n_elements(self) -> int:
@@ -141,28 +148,30 @@ class SalivaFilm:
         """The film's state at ``u`` (default rest): slabs already stretched past Z start parted."""
         E = self.n_elements
         state = {"broken": np.zeros(E, dtype=np.bool_), "dry": np.zeros(E, dtype=np.bool_),
-                 "stored": np.zeros((E, 8, 3)), "stretch": np.ones(E)}
+                 "stored": np.zeros((E, 8, 3)), "stretch": np.ones(E), "flow": np.zeros(E)}
         if u is not None:
             Q = self.stretch(u)
             state["stretch"][:] = np.minimum(Q, 1e300)
             state["broken"][:] = Q >= self.breaking_points(t)
         return state
 
-    def add_forces(self, u, t: float, state: dict, R) -> None:
-        """Advance the film's ``state`` one step at time ``t`` and subtract its nodal forces from ``R``."""
+    def add_forces(self, u, t: float, state: dict, R, dt: float = 1e-5) -> None:
+        """Advance the film's ``state`` one step (``dt``) at time ``t`` and subtract its nodal forces from ``R``."""
         p = self.params
         Z = self._Z0 if p.evaporation == 0.0 else self.breaking_points(t)
         _film_step(u, R, self.n0, self.n1, self.w, self.cgrads, self.grads, self.volumes, self.axis, Z,
                    state["broken"], state["dry"], state["stored"], state["stretch"], p.decay,
-                   p.rebond_strain, p.squeeze, self.modulus, FILM_STIFF_STRETCH, p.soften)
+                   p.rebond_strain, p.squeeze, self.modulus, FILM_STIFF_STRETCH, p.soften, state["flow"],
+                   self.thickness, self.band, p.film_thickness, p.fluidity, dt)
 
 
 from numba import njit  # noqa: E402
 
 
 @njit(inline="always", cache=True)
-def _pull_push(k, uv, n, grads, volumes, modulus, lc, pull, push):  # pragma: no cover - compiled
-    """Slab k's film forces at its two points into ``pull`` (λ ≥ 1) and ``push`` (λ < 1) (see film_forces)."""
+def _pull_push(k, uv, n, grads, volumes, modulus, lc, flow, pull, push):  # pragma: no cover - compiled
+    """Slab k's film forces at its two points into ``pull`` (λ ≥ 1) and ``push`` (λ < 1) (see film_forces);
+    its elastic stretch is λ − ``flow`` (what viscous flow has not taken up)."""
     for gp in range(2):
         f0, f1, f2 = n[0], n[1], n[2]
         for a in range(8):
@@ -171,16 +180,17 @@ def _pull_push(k, uv, n, grads, volumes, modulus, lc, pull, push):  # pragma: no
             f1 += uv[a, 1] * gn
             f2 += uv[a, 2] * gn
         lam = np.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
-        if lam >= 1.0:
-            dw = 0.5 * modulus * (lam * lam - 1.0) * lam
-        elif lam >= lc:
-            dw = modulus * (1.0 - 1.0 / lam)
+        x = lam - flow                         # the elastic stretch
+        if x >= 1.0:
+            dw = 0.5 * modulus * (x * x - 1.0) * x
+        elif x >= lc:
+            dw = modulus * (1.0 - 1.0 / x)
         else:
-            dw = modulus * (1.0 - 1.0 / lc) + modulus / (lc * lc) * (lam - lc)
+            dw = modulus * (1.0 - 1.0 / lc) + modulus / (lc * lc) * (x - lc)
         c = dw / max(lam, 1e-12) * volumes[k, gp]
         for a in range(8):
             gn = (grads[k, gp, a, 0] * n[0] + grads[k, gp, a, 1] * n[1] + grads[k, gp, a, 2] * n[2]) * c
-            if lam >= 1.0:
+            if x >= 1.0:
                 pull[a, 0] += gn * f0
                 pull[a, 1] += gn * f1
                 pull[a, 2] += gn * f2
@@ -192,7 +202,7 @@ def _pull_push(k, uv, n, grads, volumes, modulus, lc, pull, push):  # pragma: no
 
 @njit(cache=True)
 def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, stored, stretch, decay, rebond,
-               squeeze, modulus, lc, soften):  # pragma: no cover - compiled
+               squeeze, modulus, lc, soften, flow, thick, band, h0, fluidity, dt):  # pragma: no cover - compiled
     """One step of every slab: the film's force law and breaking rule; R -= its nodal forces.
 
     Per slab (nodes interpolated from the tissue, see the module docstring):
@@ -225,8 +235,25 @@ def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, st
         for i in range(3):
             fi = F[i, 0] * n[0] + F[i, 1] * n[1] + F[i, 2] * n[2]
             Q += fi * fi
-        _pull_push(k, uv, n, grads, volumes, modulus, lc, pull, push)
+        lq = np.sqrt(Q)
+        if broken[k] or dry[k]:
+            flow[k] = 0.0                          # no liquid layer to flow: a re-formed film starts afresh
+        _pull_push(k, uv, n, grads, volumes, modulus, lc, flow[k], pull, push)
         stretch[k] = Q
+        x = lq - flow[k]                           # the film's elastic stretch at its centre
+        if fluidity > 0.0 and not broken[k] and not dry[k]:
+            # Stefan flow: the film thickens (σ > 0) or is squeezed (σ < 0) at dh/dt = σ h³ / (4 η b²),
+            # b half its band across the lips; it relaxes toward x = 1 and never past it
+            h = h0 + flow[k] * thick[k]
+            if x >= 1.0:
+                sig = 0.5 * modulus * (x * x - 1.0) * x
+            elif x >= lc:
+                sig = modulus * (1.0 - 1.0 / x)
+            else:
+                sig = modulus * (1.0 - 1.0 / lc) + modulus / (lc * lc) * (x - lc)
+            f = flow[k] + dt * sig * h * h * h * fluidity / (4.0 * band[k] * band[k] * thick[k])
+            flow[k] = min(f, lq - 1.0) if sig > 0.0 else max(f, lq - 1.0, 0.0)
+        Qe = Q if flow[k] == 0.0 else x * x
         J = (F[0, 0] * (F[1, 1] * F[2, 2] - F[1, 2] * F[2, 1]) - F[0, 1] * (F[1, 0] * F[2, 2] - F[1, 2] * F[2, 0])
              + F[0, 2] * (F[1, 0] * F[2, 1] - F[1, 1] * F[2, 0]))
         if J <= 0.0:
@@ -260,7 +287,7 @@ def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, st
                     if soften <= 0.0:
                         stored[k, a, i] *= decay
                     pull[a, i] = stored[k, a, i] * fac   # the decaying pull, and contact
-        elif Q >= Z[k]:
+        elif Qe >= Z[k] or Q >= 1e300:
             broken[k] = True                       # keep this step's pull, decay from the next
             for a in range(8):
                 for i in range(3):

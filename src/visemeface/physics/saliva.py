@@ -65,6 +65,8 @@ INITIAL_MOISTURE = 100.0
 CRITICAL_MOISTURE = 100.0
 EVAPORATION_RATE = 0.0
 FORCE_DECAY = 0.99
+#: The real saliva film's thickness between the lips, 0.07-0.1 mm (seed 000 §3.4.2, citing [CD87]).
+FILM_THICKNESS = 1e-4
 
 #: Hex8 natural-coordinate signs of the nodes, order (−,−,−) (+,−,−) (+,+,−) (−,+,−), then z+.
 HEX_SIGNS = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
@@ -102,6 +104,23 @@ class SalivaParams:
         0 (default): a broken slab's pull decays by ``decay`` a step (the seed). > 0: a
         cohesive law instead: the pull held at the break fades linearly as the film's
         stretch λ = √Q grows from √Z to √Z + ``soften`` (saliva drawn into strands).
+    viscosity : float
+        η (Pa·s) of the saliva's Stefan flow. ∞ (default): the seed's solid film, which
+        does not flow. Finite: the intact film is a Maxwell body, its elastic stretch in
+        series with the squeeze-film flow of a liquid layer of thickness h between the
+        lips over a band 2b across them (Stefan's law, plane flow),
+
+        dh/dt = σ h³ / (4 η b²),   h = h₀ + δ_flow,
+
+        σ the film's stress across the lips, b half the slab's depth, h₀
+        ``film_thickness``. Flow relaxes the pull and gives no break, so lips pulled
+        slowly part by flow (slowly at first: h³), pulled fast they still break at Z
+        (on the elastic stretch). Lips brought back together squeeze the thickened film
+        out by the same law (σ < 0), so a flowed film pushes until it has thinned; flow
+        relaxes toward zero elastic stress and never past it. The state's ``flow`` is
+        δ_flow / slab thickness.
+    film_thickness : float
+        h₀ (m), the real saliva film's thickness (seed 000 §3.4.2: 0.07–0.1 mm).
     """
 
     initial_moisture: float = INITIAL_MOISTURE
@@ -111,6 +130,13 @@ class SalivaParams:
     rebond_strain: float = float("inf")
     squeeze: float = 0.0
     soften: float = 0.0
+    viscosity: float = float("inf")
+    film_thickness: float = FILM_THICKNESS
+
+    @property
+    def fluidity(self) -> float:
+        """1 / viscosity (0: the film does not flow)."""
+        return 0.0 if not np.isfinite(self.viscosity) else 1.0 / self.viscosity
 
     def __post_init__(self):
         if not np.isfinite(self.critical_moisture) or self.critical_moisture <= 0:
@@ -121,6 +147,10 @@ class SalivaParams:
             raise InputError(f"evaporation rate must be >= 0, got {self.evaporation}")
         if not (np.isfinite(self.soften) and self.soften >= 0):
             raise InputError(f"softening stretch must be >= 0, got {self.soften}")
+        if not (self.viscosity > 0):
+            raise InputError(f"saliva viscosity must be > 0 Pa·s, got {self.viscosity}")
+        if not (np.isfinite(self.film_thickness) and self.film_thickness > 0):
+            raise InputError(f"saliva film thickness must be > 0 m, got {self.film_thickness}")
         if not 0.0 <= self.decay < 1.0:
             raise InputError(f"force decay must be in [0, 1), got {self.decay}")
 
@@ -201,11 +231,12 @@ def deformation_gradient(u, dNdX):
 FILM_STIFF_STRETCH = 0.5
 
 
-def _film_stress(lam, modulus, lc=FILM_STIFF_STRETCH):
-    """dW/dλ of the film (see :func:`film_forces`)."""
-    return np.where(lam >= 1.0, 0.5 * modulus * (lam * lam - 1.0) * lam,
-                    np.where(lam >= lc, modulus * (1.0 - 1.0 / np.maximum(lam, lc)),
-                             modulus * (1.0 - 1.0 / lc) + modulus / lc ** 2 * (lam - lc)))
+def _film_stress(lam, modulus, lc=FILM_STIFF_STRETCH, flow=0.0):
+    """dW/dλ of the film (see :func:`film_forces`) at the elastic stretch x = λ − flow."""
+    x = lam - flow
+    return np.where(x >= 1.0, 0.5 * modulus * (x * x - 1.0) * x,
+                    np.where(x >= lc, modulus * (1.0 - 1.0 / np.maximum(x, lc)),
+                             modulus * (1.0 - 1.0 / lc) + modulus / lc ** 2 * (x - lc)))
 
 
 #: Natural coordinate ξ of the film's two integration points along the seam.
@@ -232,7 +263,7 @@ def film_gradients(X):
     return np.stack(grads, axis=1), np.stack(vols, axis=1)
 
 
-def film_forces(u, axis, grads, volumes, modulus):
+def film_forces(u, axis, grads, volumes, modulus, flow=None):
     """Internal nodal forces (E, 8, 3) and stretches Q (E, 2) of a saliva *film*.
 
     A liquid film between the lips flows in its own plane (seed 000 §3.4.1:
@@ -265,6 +296,9 @@ def film_forces(u, axis, grads, volumes, modulus):
     axis : (E, 3) unit local y axes.
     grads, volumes : from :func:`film_gradients`.
     modulus : float
+    flow : (E,) array or None
+        Stretch taken up by the film's viscous flow (:attr:`SalivaParams.viscosity`):
+        the film's elastic stretch is x = λ − flow (x ≥ 1 pulls, x < 1 pushes).
 
     Returns
     -------
@@ -278,9 +312,10 @@ def film_forces(u, axis, grads, volumes, modulus):
     Q = np.sum(Fn * Fn, axis=2)
     g = np.einsum("egaj,ej->ega", grads, axis)
     lam = np.sqrt(Q)
-    c = _film_stress(lam, modulus) / np.maximum(lam, 1e-12) * volumes      # (E, 2)
-    pull = np.einsum("eg,ega,egi->eai", np.where(lam >= 1.0, c, 0.0), g, Fn)
-    push = np.einsum("eg,ega,egi->eai", np.where(lam < 1.0, c, 0.0), g, Fn)
+    fl = 0.0 if flow is None else np.asarray(flow, dtype=np.float64)[:, None]
+    c = _film_stress(lam, modulus, flow=fl) / np.maximum(lam, 1e-12) * volumes      # (E, 2)
+    pull = np.einsum("eg,ega,egi->eai", np.where(lam - fl >= 1.0, c, 0.0), g, Fn)
+    push = np.einsum("eg,ega,egi->eai", np.where(lam - fl < 1.0, c, 0.0), g, Fn)
     return pull, push, Q
 
 

@@ -151,7 +151,7 @@ class Saliva(Term):
         self.film = film
 
     def add(self, state, t, R):
-        self.film.add_forces(state.u, t, state.saliva, R)
+        self.film.add_forces(state.u, t, state.saliva, R, state.dt)
 
 
 class Drag(Term):
