@@ -169,6 +169,17 @@ from numba import njit  # noqa: E402
 
 
 @njit(inline="always", cache=True)
+def _film_stress(x, modulus, lc):  # pragma: no cover - compiled
+    """dW/dλ of the film at elastic stretch ``x``: St Venant–Kirchhoff pulled, a log barrier pressed,
+    linear below ``lc`` (the stiffness cap that keeps the step stable)."""
+    if x >= 1.0:
+        return 0.5 * modulus * (x * x - 1.0) * x
+    if x >= lc:
+        return modulus * (1.0 - 1.0 / x)
+    return modulus * (1.0 - 1.0 / lc) + modulus / (lc * lc) * (x - lc)
+
+
+@njit(inline="always", cache=True)
 def _pull_push(k, uv, n, grads, volumes, modulus, lc, flow, pull, push):  # pragma: no cover - compiled
     """Slab k's film forces at its two points into ``pull`` (λ ≥ 1) and ``push`` (λ < 1) (see film_forces);
     its elastic stretch is λ − ``flow`` (what viscous flow has not taken up)."""
@@ -181,12 +192,7 @@ def _pull_push(k, uv, n, grads, volumes, modulus, lc, flow, pull, push):  # prag
             f2 += uv[a, 2] * gn
         lam = np.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
         x = lam - flow                         # the elastic stretch
-        if x >= 1.0:
-            dw = 0.5 * modulus * (x * x - 1.0) * x
-        elif x >= lc:
-            dw = modulus * (1.0 - 1.0 / x)
-        else:
-            dw = modulus * (1.0 - 1.0 / lc) + modulus / (lc * lc) * (x - lc)
+        dw = _film_stress(x, modulus, lc)
         c = dw / max(lam, 1e-12) * volumes[k, gp]
         for a in range(8):
             gn = (grads[k, gp, a, 0] * n[0] + grads[k, gp, a, 1] * n[1] + grads[k, gp, a, 2] * n[2]) * c
@@ -245,12 +251,7 @@ def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, st
             # Stefan flow: the film thickens (σ > 0) or is squeezed (σ < 0) at dh/dt = σ h³ / (4 η b²),
             # b half its band across the lips; it relaxes toward x = 1 and never past it
             h = h0 + flow[k] * thick[k]
-            if x >= 1.0:
-                sig = 0.5 * modulus * (x * x - 1.0) * x
-            elif x >= lc:
-                sig = modulus * (1.0 - 1.0 / x)
-            else:
-                sig = modulus * (1.0 - 1.0 / lc) + modulus / (lc * lc) * (x - lc)
+            sig = _film_stress(x, modulus, lc)
             f = flow[k] + dt * sig * h * h * h * fluidity / (4.0 * band[k] * band[k] * thick[k])
             flow[k] = min(f, lq - 1.0) if sig > 0.0 else max(f, lq - 1.0, 0.0)
         Qe = Q if flow[k] == 0.0 else x * x
