@@ -167,6 +167,25 @@ def _force_align(pcm: bytes, words, where):
     return out
 
 
+#: Recordings longer than this (s) are decoded in a child process. pocketsphinx holds the GIL for a whole
+#: decode (about 4 % of the audio's length), so Ctrl-C could not end the run until it finished; a child
+#: can be ended at once. Shorter ones decode here (a child costs about 0.5 s to start).
+CHILD_DECODE_S = 20.0
+
+
+def _decode(fn, pcm: bytes, *args):
+    """``fn(pcm, *args)``; in a spawned child for long recordings, ended at once on Ctrl-C or SIGTERM."""
+    if len(pcm) < CHILD_DECODE_S * MODEL_RATE * 2:
+        return fn(pcm, *args)
+    import multiprocessing
+    import signal
+
+    # spawn, never fork (a forked numba thread pool can hang); the child ignores SIGINT so that a
+    # terminal's Ctrl-C prints one line, from this process, which then ends the child (Pool.terminate).
+    with multiprocessing.get_context("spawn").Pool(1, signal.signal, (signal.SIGINT, signal.SIG_IGN)) as pool:
+        return pool.apply_async(fn, (pcm, *args)).get()
+
+
 def phone_loop(pcm: bytes) -> list[tuple[str, float, float]]:
     """Recognised phones ``(ARPAbet or silence label, start, end)`` (s) of 16 kHz PCM, no text."""
     decoder = _decoder(allphone=_model("en-us", "en-us-phone.lm.bin"), lw=PHONE_LOOP_LW)
@@ -243,12 +262,12 @@ def utterance_from_audio(audio, text: str | None = None, *, where=None, check_te
     total = samples.size / rate
     pcm = model_pcm(samples, rate, where)
     if text is None:
-        seg = _segments(phone_loop(pcm), total, where)
+        seg = _segments(_decode(phone_loop, pcm), total, where)
         if not (seg["phoneme"] != "_").any():
             raise InputError("no phones recognised in the audio", where)
         return Utterance(seg, source_format="recognised")
     words, tags = _words_of(text, where)
-    aligned = _force_align(pcm, words, where)
+    aligned = _decode(_force_align, pcm, words, where)
     if check_text:
         _check_match(aligned, where)
     from visemeface.speech.g2p import cmu_pronunciations

@@ -1,0 +1,51 @@
+"""Ctrl-C ends a long alignment at once (pocketsphinx holds the GIL for a whole decode).
+
+Before: ``lipsync`` of a 5-minute recording printed "interrupted" only when the decode ended
+(8.6 s after SIGINT here); long recordings are now decoded in a child process that is ended.
+"""
+
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+import soundfile as sf
+
+from visemeface.speech import align
+
+
+def test_a_child_decode_gives_the_same_phones_and_words(vowels_wav, monkeypatch):
+    inline = align.utterance_from_audio(vowels_wav, "ah ee")
+    recognised = align.utterance_from_audio(vowels_wav)
+    monkeypatch.setattr(align, "CHILD_DECODE_S", 0.0)
+    assert align.utterance_from_audio(vowels_wav, "ah ee").segments.equals(inline.segments)
+    assert align.utterance_from_audio(vowels_wav).segments.equals(recognised.segments)
+
+
+def test_a_child_decode_passes_the_refusal_on(vowels_wav, monkeypatch):
+    from visemeface.errors import InputError
+
+    monkeypatch.setattr(align, "CHILD_DECODE_S", 0.0)
+    with pytest.raises(InputError, match="could not be aligned"):
+        align.utterance_from_audio(vowels_wav, "the quick brown fox jumps over the lazy dog again and again")
+
+
+@pytest.mark.slow
+def test_ctrl_c_ends_lipsync_of_a_long_recording_within_two_seconds(tmp_path, vowels_wav):
+    x, rate = sf.read(str(vowels_wav))
+    sf.write(str(tmp_path / "long.wav"), np.tile(x, 160), rate)           # 224 s: a decode of several s
+    proc = subprocess.Popen([sys.executable, "-m", "visemeface", "lipsync", "long.wav", "-o", "long.lab"],
+                            cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(3.0)                                                        # reading done, decoding
+    assert proc.poll() is None, proc.communicate()
+    t0 = time.monotonic()
+    proc.send_signal(signal.SIGINT)
+    try:
+        _, err = proc.communicate(timeout=30)
+    finally:
+        proc.kill()
+    assert time.monotonic() - t0 < 2.0, f"{time.monotonic() - t0:.1f} s after Ctrl-C"
+    assert proc.returncode == 130 and err == "visemeface: interrupted\n", err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["long.wav"]
