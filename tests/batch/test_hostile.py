@@ -1,6 +1,13 @@
 """Regressions from a hostile user's batch runs (issue 20, second round)."""
 
 import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
 
 from visemeface.batch.clip import CLIP_RECORD, clip_state
 from visemeface.batch.manifest import Job
@@ -15,3 +22,25 @@ def test_a_clip_record_that_is_not_an_object_means_other_settings(tmp_path):
         assert clip_state(job, tmp_path) == "other"
     (tmp_path / "c1" / CLIP_RECORD).write_text(json.dumps({"settings": job.settings()}))
     assert clip_state(job, tmp_path) == "done"
+
+
+@pytest.mark.slow
+def test_ctrl_c_on_a_terminal_ends_batch_with_one_line(tmp_path):
+    """A terminal's Ctrl-C reaches the whole process group: each Dask worker printed a KeyboardInterrupt
+    traceback (and the cancelled tasks a WARNING each) before "visemeface: interrupted"."""
+    rows = "".join(f"c{i},bob moves five boats number {i}\n" for i in range(8))
+    (tmp_path / "jobs.csv").write_text("clip,text\n" + rows)
+    proc = subprocess.Popen([sys.executable, "-m", "visemeface", "batch", "jobs.csv", "-o", "out", "--size", "96",
+                             "--msaa", "0", "--workers", "2", "-q"], cwd=tmp_path, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        t0 = time.monotonic()
+        while not any((tmp_path / "out").glob("c*")) and time.monotonic() - t0 < 120:
+            time.sleep(0.05)                       # a clip is being made or done: the workers are busy
+        assert proc.poll() is None, proc.communicate()
+        os.killpg(proc.pid, signal.SIGINT)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130 and err == "visemeface: interrupted\n", err
