@@ -23,3 +23,35 @@ def test_a_fake_mp3_is_one_line_without_decoder_noise(tmp_path, command):
     code, err = _visemeface(tmp_path, *command)
     assert code == 2 and err.count("\n") == 1 and err.startswith("visemeface: error: fake.mp3: "), err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["fake.mp3", "t.txt"]
+
+
+TINY = "0.00 0.05 _\n0.05 0.25 aa\n0.25 0.30 _\n"
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["--track", "t.csv", "--gltf-shapes", "arkit"], "--gltf-shapes is an option of --gltf, which is not given"),
+    (["--track", "t.csv", "--dat-fps", "12"], "--dat-fps is an option of --rhubarb, which is not given"),
+    (["--track", "t.csv", "--dat-preston-blair"], "--dat-preston-blair is an option of --rhubarb"),
+    (["--rhubarb", "r.tsv", "--dat-fps", "12"], "r.tsv: --dat-fps is for a .dat file; this one is .tsv"),
+    (["--rhubarb", "r.json", "--dat-preston-blair"], "--dat-preston-blair is for a .dat file"),
+])
+def test_an_option_of_an_output_not_written_is_refused_not_ignored(tmp_path, monkeypatch, capsys, argv, message):
+    """`--gltf-shapes arkit` without --gltf, or --dat-fps with a .tsv, ran and silently ignored them."""
+    from visemeface.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "u.txt").write_text(TINY)
+    assert main(["speak", "u.txt", "--no-video", *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["u.txt"]
+
+
+def test_the_sub_options_still_work_with_their_output(tmp_path, monkeypatch):
+    from visemeface.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "u.txt").write_text(TINY)
+    assert main(["speak", "u.txt", "--no-video", "-q", "--rhubarb", "r.dat", "--dat-fps", "12",
+                 "--dat-preston-blair", "--gltf", "g.glb", "--gltf-shapes", "vrm"]) == 0
+    assert "rest" in (tmp_path / "r.dat").read_text() and (tmp_path / "g.glb").stat().st_size > 0

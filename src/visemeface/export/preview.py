@@ -167,10 +167,10 @@ def preview_html(glb: bytes, audio: bytes | None = None, audio_type: str = "audi
 def glb_duration(glb: bytes) -> float:
     """Largest keyframe time of a .glb's animations (0 when none): checks the container too."""
     if len(glb) < 20 or glb[:4] != b"glTF":
-        raise InputError("not a binary glTF (.glb) file")
+        raise InputError("not a readable binary glTF (no glTF header)")
     length, kind = struct.unpack_from("<I4s", glb, 12)
     if kind != b"JSON":
-        raise InputError("binary glTF without a JSON chunk")
+        raise InputError("not a readable binary glTF (no JSON chunk)")
     try:
         doc = json.loads(glb[20:20 + length])
         times = [float(doc["accessors"][s["input"]].get("max", [0.0])[0])
