@@ -55,3 +55,31 @@ def test_the_sub_options_still_work_with_their_output(tmp_path, monkeypatch):
     assert main(["speak", "u.txt", "--no-video", "-q", "--rhubarb", "r.dat", "--dat-fps", "12",
                  "--dat-preston-blair", "--gltf", "g.glb", "--gltf-shapes", "vrm"]) == 0
     assert "rest" in (tmp_path / "r.dat").read_text() and (tmp_path / "g.glb").stat().st_size > 0
+
+
+def _profile(path, area):
+    rows = "".join(f"{i},{0.04 * i:.2f},{int(float(a) > 0)},{a},0.5,0.1\n" for i, a in enumerate(area))
+    path.write_text("frame,time,count,area,width,height\n" + rows)
+
+
+def test_compare_names_a_non_finite_value_plainly(tmp_path, monkeypatch, capsys):
+    """The message said "non-finite value np.float64(inf)"."""
+    from visemeface.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    _profile(tmp_path / "p.csv", ["0", "1e309", "0.2"])
+    assert main(["compare", "p.csv", "p.csv"]) == 2
+    assert capsys.readouterr().err == "visemeface: error: p.csv:3: column 'area' has a non-finite value inf\n"
+
+
+def test_compare_of_flat_profiles_keeps_its_columns(tmp_path, monkeypatch, capsys):
+    """A flat profile's correlation is NaN; it was printed left-aligned, run into the column before."""
+    from visemeface.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    _profile(tmp_path / "p.csv", ["0", "0", "0"])
+    assert main(["compare", "p.csv", "p.csv"]) == 0
+    head, row = capsys.readouterr().out.splitlines()
+    cells = row.split()
+    assert len(cells) == len(head.split()) + 3 and cells[-5:] == ["nan", "nan", "nan", "+0", "nan"], row
+    assert len(row) == len(head)
