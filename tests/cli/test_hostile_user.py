@@ -83,3 +83,20 @@ def test_compare_of_flat_profiles_keeps_its_columns(tmp_path, monkeypatch, capsy
     cells = row.split()
     assert len(cells) == len(head.split()) + 3 and cells[-5:] == ["nan", "nan", "nan", "+0", "nan"], row
     assert len(row) == len(head)
+
+
+def test_a_bad_tag_in_text_is_not_blamed_on_the_recordings_line_1(tmp_path, monkeypatch, capsys, vowels_wav):
+    """`--text "[happiness nan] ..."` said "a.wav:1: bad emotion tag"; a --text-file names its own line."""
+    import shutil
+
+    from visemeface.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    shutil.copy(vowels_wav, tmp_path / "a.wav")
+    assert main(["lipsync", "a.wav", "--text", "[happiness nan] ah ee", "-o", "a.lab"]) == 2
+    assert capsys.readouterr().err == ("visemeface: error: bad emotion tag '[happiness nan]'; "
+                                       "write [name weight], e.g. [anger 0.8]\n")
+    (tmp_path / "words.txt").write_text("ah\nee [anger 2]\n")
+    assert main(["lipsync", "a.wav", "--text-file", "words.txt", "-o", "a.lab"]) == 2
+    assert capsys.readouterr().err.startswith("visemeface: error: words.txt:2: emotion weight 2")
+    assert not (tmp_path / "a.lab").exists()

@@ -117,8 +117,6 @@ def _words_of(text: str, where):
             words.append(value)
         elif kind == "emotion":
             tags.append((len(words), *value))
-    if not words:
-        raise InputError("no words in the text to align", where)
     return words, tags
 
 
@@ -232,7 +230,8 @@ def _check_match(aligned, where) -> float:
     return per_frame
 
 
-def utterance_from_audio(audio, text: str | None = None, *, where=None, check_text: bool = True) -> Utterance:
+def utterance_from_audio(audio, text: str | None = None, *, where=None, check_text: bool = True,
+                         text_where=None) -> Utterance:
     """Timed phones (and words, emotion keys) of a recording.
 
     Parameters
@@ -246,6 +245,9 @@ def utterance_from_audio(audio, text: str | None = None, *, where=None, check_te
     check_text : bool
         Refuse text that does not match the audio (:data:`MISMATCH_SCORE`); off for audio known
         to say the text (synthesised speech, which scores poorly on a model of human voices).
+    text_where : str or Path, optional
+        The file the text came from, named (with the line) in errors about the text itself (a bad
+        emotion tag); None: the errors name no file (never the audio's "line 1").
 
     Returns
     -------
@@ -266,7 +268,9 @@ def utterance_from_audio(audio, text: str | None = None, *, where=None, check_te
         if not (seg["phoneme"] != "_").any():
             raise InputError("no phones recognised in the audio", where)
         return Utterance(seg, source_format="recognised")
-    words, tags = _words_of(text, where)
+    words, tags = _words_of(text, text_where)
+    if not words:
+        raise InputError("no words in the text to align", text_where or where)
     aligned = _decode(_force_align, pcm, words, where)
     if check_text:
         _check_match(aligned, where)
