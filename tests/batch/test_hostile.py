@@ -44,3 +44,16 @@ def test_ctrl_c_on_a_terminal_ends_batch_with_one_line(tmp_path):
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
     assert proc.returncode == 130 and err == "visemeface: interrupted\n", err
+
+
+def test_a_huge_worker_count_is_refused_before_any_process_starts(tmp_path, monkeypatch, capsys):
+    """`--workers 10000` with as many clips started 10,000 Python processes (the machine ran out of memory)."""
+    from visemeface.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "jobs.csv").write_text("clip,text\na,one\n")
+    cores = os.cpu_count() or 1
+    assert main(["batch", "jobs.csv", "-o", "out", "--workers", str(4 * cores + 1)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"over 4 processes a core ({cores} cores here)" in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["jobs.csv"]
