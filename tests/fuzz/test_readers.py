@@ -358,3 +358,69 @@ def test_retarget_data_readers(table, rig, monkeypatch, tmp_path):
             recipes.action_units.cache_clear()
             recipes.phoneme_classes.cache_clear()
     fuzz(f"retarget {table}", read, seed, ".csv", 25)
+
+
+# ---------------------------------------------------------------------------------------------- well-formed, hostile
+JSON_VALUES = st.recursive(st.none() | st.booleans() | st.integers(-2**70, 2**70) | st.floats() | st.text(max_size=6),
+                           lambda inner: st.lists(inner, max_size=3) | st.dictionaries(
+                               st.sampled_from(["settings", "accessors", "animations", "samplers", "input", "max",
+                                                "clip", "x"]), inner, max_size=4), max_leaves=12)
+
+
+def test_well_formed_json_with_any_contents(tmp_path):
+    """Readable JSON of any shape where the readers expect an object: a clip record, a glb's JSON chunk."""
+    import struct
+
+    from visemeface.batch.clip import CLIP_RECORD, clip_state
+    from visemeface.batch.manifest import Job
+    from visemeface.export.preview import glb_duration
+
+    job = Job(clip="c1", text="one")
+    (tmp_path / "c1").mkdir()
+
+    def record(p):
+        (tmp_path / "c1" / CLIP_RECORD).write_bytes(p.read_bytes())
+        assert clip_state(job, tmp_path) == "other"
+
+    def glb(p):
+        doc = p.read_bytes()
+        glb_duration(b"glTF" + struct.pack("<II", 2, 20 + len(doc)) + struct.pack("<I4s", len(doc), b"JSON") + doc)
+
+    @settings(FUZZ, max_examples=60)
+    @given(JSON_VALUES)
+    def run(value):
+        data = json.dumps(value).encode()
+        check_reader("batch clip record (any JSON)", record, data, ".json")
+        check_reader("preview glb (any JSON chunk)", glb, data, ".json")
+    run()
+
+
+CELLS = st.sampled_from(["", "nan", "inf", "-1", "0", "1e309", "99999999999999999999", "t.txt", "../t.txt", "/",
+                         "happiness=nan", "happiness=2", "happiness", "zz=0.5", "video", "video gltf", "obj;pc2",
+                         "none", "sticky", "face", "mouth", "linear", "a b", "\x00", "é", '"', "c1"])
+
+
+def test_batch_manifest_rows_with_hostile_cells(tmp_path):
+    """A well-formed manifest whose cells are the values that break readers: each row is a Job or a one-line
+    BadRow, and the manifest is never refused whole for a bad cell."""
+    import csv
+
+    from visemeface.batch.manifest import COLUMNS, BadRow, Job, read_manifest
+
+    (tmp_path / "t.txt").write_text("0.00 0.05 _\n0.05 0.25 aa\n0.25 0.30 _\n")
+
+    @settings(FUZZ, max_examples=80)
+    @given(st.lists(st.fixed_dictionaries({c: CELLS for c in COLUMNS}), min_size=1, max_size=4))
+    def run(rows):
+        path = tmp_path / "m.csv"
+        with open(path, "w", newline="", encoding="utf-8") as fh:
+            w = csv.DictWriter(fh, fieldnames=COLUMNS)
+            w.writeheader()
+            w.writerows(rows)
+
+        def read(p):
+            out = read_manifest(path, {"size": 64})
+            assert len(out) == sum(any(r.values()) for r in rows)
+            assert all(isinstance(r, Job) or (isinstance(r, BadRow) and "\n" not in r.error) for r in out)
+        check_reader("batch manifest (hostile cells)", read, b"", ".csv")
+    run()
