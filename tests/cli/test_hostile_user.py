@@ -100,3 +100,20 @@ def test_a_bad_tag_in_text_is_not_blamed_on_the_recordings_line_1(tmp_path, monk
     assert main(["lipsync", "a.wav", "--text-file", "words.txt", "-o", "a.lab"]) == 2
     assert capsys.readouterr().err.startswith("visemeface: error: words.txt:2: emotion weight 2")
     assert not (tmp_path / "a.lab").exists()
+
+
+@pytest.mark.parametrize("other", [["--arkit", "same.json"], ["--vrm", "same.json"]])
+def test_save_transcript_onto_another_output_is_refused_before_work(tmp_path, monkeypatch, capsys, vowels_wav,
+                                                                     other):
+    """`--save-transcript same.json --arkit same.json`: a FileNotFoundError traceback after the whole run,
+    and same.json held the weights, the transcript lost."""
+    import shutil
+
+    from visemeface.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    shutil.copy(vowels_wav, tmp_path / "a.wav")
+    assert main(["speak", "a.wav", "--text", "ah ee", "--no-video", "--save-transcript", "same.json", *other]) == 2
+    assert capsys.readouterr().err == ("visemeface: error: same.json: --save-transcript and another output are "
+                                       "the same path\n")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.wav"]
