@@ -49,3 +49,33 @@ def test_ctrl_c_ends_lipsync_of_a_long_recording_within_two_seconds(tmp_path, vo
     assert time.monotonic() - t0 < 2.0, f"{time.monotonic() - t0:.1f} s after Ctrl-C"
     assert proc.returncode == 130 and err == "visemeface: interrupted\n", err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["long.wav"]
+
+
+@pytest.mark.slow
+def test_the_decoding_child_dies_with_a_killed_lipsync(tmp_path, vowels_wav):
+    """SIGKILL of the command left a multiprocessing child decoding on, which then printed a BrokenPipeError
+    traceback and a leaked-semaphore warning on the terminal."""
+    import os
+
+    import psutil
+
+    x, rate = sf.read(str(vowels_wav))
+    sf.write(str(tmp_path / "long.wav"), np.tile(x, 300), rate)
+    proc = subprocess.Popen([sys.executable, "-m", "visemeface", "lipsync", "long.wav", "-o", "long.lab"],
+                            cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        t0 = time.monotonic()
+        while not psutil.Process(proc.pid).children() and time.monotonic() - t0 < 30:
+            time.sleep(0.05)
+        time.sleep(3.0)                        # the child has the recording and is decoding
+        children = psutil.Process(proc.pid).children(recursive=True)
+        assert children, "no decoding child"
+        os.kill(proc.pid, signal.SIGKILL)
+        t0 = time.monotonic()
+        _, err = proc.communicate(timeout=60)  # returns when every holder of the command's stderr is gone
+        assert time.monotonic() - t0 < 2.0 and err == "", err
+        gone, alive = psutil.wait_procs(children, timeout=1.0)
+        alive = [p for p in alive if p.status() != psutil.STATUS_ZOMBIE]
+        assert not alive, f"still running: {alive}"
+    finally:
+        proc.kill()

@@ -172,16 +172,55 @@ CHILD_DECODE_S = 20.0
 
 
 def _decode(fn, pcm: bytes, *args):
-    """``fn(pcm, *args)``; in a spawned child for long recordings, ended at once on Ctrl-C or SIGTERM."""
+    """``fn(pcm, *args)``; in a child process for long recordings, ended at once on Ctrl-C or SIGTERM.
+
+    The child is a fresh interpreter (never a fork: a forked numba thread pool can hang) in its own
+    session, so a terminal's Ctrl-C reaches only this process, which kills it; it also dies with this
+    process (SIGKILL included) instead of decoding on and printing a broken pipe later.
+    """
     if len(pcm) < CHILD_DECODE_S * MODEL_RATE * 2:
         return fn(pcm, *args)
-    import multiprocessing
-    import signal
+    import pickle
+    import subprocess
+    import sys
 
-    # spawn, never fork (a forked numba thread pool can hang); the child ignores SIGINT so that a
-    # terminal's Ctrl-C prints one line, from this process, which then ends the child (Pool.terminate).
-    with multiprocessing.get_context("spawn").Pool(1, signal.signal, (signal.SIGINT, signal.SIG_IGN)) as pool:
-        return pool.apply_async(fn, (pcm, *args)).get()
+    proc = subprocess.Popen([sys.executable, "-c", "from visemeface.speech.align import _child; _child()"],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            start_new_session=True)
+    try:
+        out, err = proc.communicate(pickle.dumps((os.getpid(), fn.__name__, pcm, args)))
+    except BaseException:
+        proc.kill()
+        proc.wait()
+        raise
+    if proc.returncode != 0 or not out:
+        raise RuntimeError(f"the alignment process failed (exit {proc.returncode}): "
+                           f"{err.decode(errors='replace').strip()[-300:]}")
+    ok, value = pickle.loads(out)
+    if not ok:
+        raise value
+    return value
+
+
+def _child() -> None:
+    """The child of :func:`_decode`: reads (parent pid, function name, pcm, args), writes (ok, result)."""
+    import ctypes
+    import pickle
+    import signal
+    import sys
+
+    parent, name, pcm, args = pickle.loads(sys.stdin.buffer.read())
+    try:                                        # die with the parent (Linux); elsewhere it finishes alone
+        ctypes.CDLL(None).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+    if os.getppid() != parent:
+        return
+    try:
+        result = (True, {"phone_loop": phone_loop, "_force_align": _force_align}[name](pcm, *args))
+    except InputError as exc:
+        result = (False, exc)
+    sys.stdout.buffer.write(pickle.dumps(result))
 
 
 def phone_loop(pcm: bytes) -> list[tuple[str, float, float]]:
