@@ -57,3 +57,16 @@ def test_a_huge_worker_count_is_refused_before_any_process_starts(tmp_path, monk
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and f"over 4 processes a core ({cores} cores here)" in err, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["jobs.csv"]
+
+
+def test_a_recording_in_the_transcript_column_is_a_bad_row_saying_where_it_goes(tmp_path, vowels_wav):
+    """`transcript=take.wav` failed on the worker with "take.wav:1: not UTF-8 text (byte 0x..)"."""
+    import shutil
+
+    from visemeface.batch.manifest import BadRow, read_manifest
+
+    shutil.copy(vowels_wav, tmp_path / "take.wav")
+    (tmp_path / "m.csv").write_text("clip,transcript\nc1,take.wav\n")
+    [row] = read_manifest(tmp_path / "m.csv")
+    assert isinstance(row, BadRow) and row.error.endswith(
+        "take.wav: a recording is no transcript: put it in the audio column and its words in text")
