@@ -205,9 +205,11 @@ def _decode(fn, pcm: bytes, *args):
     import subprocess
     import sys
 
+    package_root = str(Path(__file__).resolve().parents[2])     # importable however this process found it
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [package_root, os.environ.get("PYTHONPATH")])))
     proc = subprocess.Popen([sys.executable, "-c", "from visemeface.speech.align import _child; _child()"],
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            start_new_session=True)
+                            start_new_session=True, env=env)
     try:
         out, err = proc.communicate(pickle.dumps((os.getpid(), fn.__name__, pcm, args)))
     except BaseException:
