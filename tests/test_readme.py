@@ -51,6 +51,25 @@ def _outputs(argv):
     return outs
 
 
+def _python_outputs():
+    """The files and folders README's Python blocks write (their first runs must not meet a command's)."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    outs = set()
+    for block in re.findall(r"```python\n(.*?)```", text, flags=re.S):
+        outs |= set(re.findall(r'(?:save_png|write_grid_manifest)\("([^"]+)"', block))
+        outs |= set(re.findall(r'vb\.run\(.*\), "([^"]+)"', block))
+    return outs
+
+
+def test_readme_python_writes_none_of_the_commands_outputs():
+    written = {argv[argv.index("--grid") + 2] for argv in readme_commands() if "--grid" in argv}
+    for argv in readme_commands():
+        written |= _outputs(argv)
+    python = _python_outputs()
+    assert {"happy_ah.png"} <= python and len(python) >= 3
+    assert not python & written, f"README's Python and its commands both write {sorted(python & written)}"
+
+
 def _physics(argv):
     return argv[0] == "simulate" or "--physics" in argv
 

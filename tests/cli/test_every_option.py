@@ -31,8 +31,8 @@ BASE = {
     "batch": ["jobs.csv", "-o", "out"],
     "lipsync": ["a.wav", "--text", "ah ee", "-o", "a.lab"],
 }
-#: Options that take no invalid value, with the reason.
-FREE = {}
+#: Options (or positional arguments, by dest) that take no invalid value, with the reason.
+FREE = {("say", "text"): "any text is spoken (letters it cannot say are refused, tested in tests/speech)"}
 
 
 def _commands():
@@ -54,6 +54,11 @@ def _bad_values(action):
 def _cases():
     for name, parser in _commands().items():
         assert name in BASE, f"add a valid invocation of `{name}` to BASE"
+        positional = [a for a in parser._actions if not a.option_strings]
+        for k, action in enumerate(positional):          # a missing file, a posture or scenario not known
+            if (name, action.dest) not in FREE:
+                for value in _bad_values(action):
+                    yield pytest.param(name, k, value, id=f"{name} {action.dest.upper()} {value}")
         for action in parser._actions:
             if not action.option_strings or action.nargs == 0 or action.dest == "help":
                 continue
@@ -109,7 +114,9 @@ def test_an_invalid_option_value_is_one_line_exit_2_and_writes_nothing(inputs, m
     monkeypatch.chdir(inputs)
     before = _listing(inputs)
     argv = list(BASE[command])
-    if option in argv:
+    if isinstance(option, int):                            # the k-th positional argument (BASE lists them first)
+        argv[option] = value
+    elif option in argv:
         argv[argv.index(option) + 1] = value
     else:
         argv += [f"{option}={value}"]

@@ -109,14 +109,15 @@ LONG_TEXT = ("Bob moves five boats past the old mill while seven quiet sheep wat
 KINEMATIC = {
     "speak": ["speak", "{transcript}"],
     "say": ["say", LONG_TEXT, "--rate", "120"],
+    "speak-recording": ["speak", "{recording}", "--text", "set white with p two soon"],   # aligned, sound muxed
 }
 
 
 def _kinematic(work, command, tag, *more):
     from visemeface.resources import transcripts_path
 
-    head = [a.format(transcript=transcripts_path("bob_moves_five_boats_long.TextGrid"))
-            for a in KINEMATIC[command]]
+    head = [a.format(transcript=transcripts_path("bob_moves_five_boats_long.TextGrid"),
+                     recording=transcripts_path("set_white_with_p_two_soon.wav")) for a in KINEMATIC[command]]
     argv = [sys.executable, "-m", "visemeface", *head, "--fps", "120", "--size", "64", "--msaa", "0", "-q",
             "-o", f"{tag}.mp4", "--frames", f"{tag}_fr", "--pc2", f"{tag}.pc2", "--measures", f"{tag}.csv", *more]
     return subprocess.Popen(argv, cwd=work, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)

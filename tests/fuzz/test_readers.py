@@ -247,3 +247,180 @@ def test_checkpoint_reader_well_formed_npz():
             check_reader("checkpoint (well-formed npz)", lambda p: RunCheckpoint(folder, "k", 4, 30).load(),
                          b"", "")
     run()
+
+
+# ---------------------------------------------------------------------------------------------- batch files
+MANIFEST = (b"clip,transcript,text,audio,emotion,physics,fps,size,view,msaa,interp,rate,outputs\n"
+            b"c1,t.txt,,,happiness=0.6; surprise=0.2,none,30,64,mouth,0,coarticulation,,video gltf\n"
+            b"c2,,one five,,,,25,,,,,150,track\n"
+            b"c3,,bob moves,a.wav,anger,,,,face,,,,obj\n")
+
+
+def test_batch_manifest_reader(tmp_path, vowels_wav):
+    import shutil
+
+    from visemeface.batch.manifest import read_manifest
+
+    (tmp_path / "t.txt").write_text("0.00 0.05 _\n0.05 0.25 aa\n0.25 0.30 _\n")
+    shutil.copy(vowels_wav, tmp_path / "a.wav")
+
+    def read(p):
+        moved = tmp_path / p.name
+        shutil.copy(p, moved)                   # beside the files its rows name
+        try:
+            rows = read_manifest(moved, {"size": 64})
+        finally:
+            moved.unlink()
+        for row in rows:                        # a bad row's reason is one line too
+            assert "\n" not in getattr(row, "error", ""), row
+    fuzz("batch manifest (CSV)", read, MANIFEST, ".csv", 80)
+
+
+def test_batch_clip_record_reader(tmp_path):
+    from visemeface.batch.clip import CLIP_RECORD, clip_state
+    from visemeface.batch.manifest import Job
+
+    job = Job(clip="c1", text="one")
+    seed = json.dumps({"settings": job.settings(), "seconds": 1.5}).encode()
+
+    def read(p):                                # clip_state on --resume: "done", "other" or "missing", no crash
+        (tmp_path / "c1").mkdir(exist_ok=True)
+        (tmp_path / "c1" / CLIP_RECORD).write_bytes(p.read_bytes())
+        assert clip_state(job, tmp_path) in ("done", "other")
+    fuzz("batch clip record (JSON)", read, seed, ".json", 40)
+
+
+# ---------------------------------------------------------------------------------------------- recordings
+def _mp3_bytes(wav: Path) -> bytes:
+    import subprocess
+
+    import imageio_ffmpeg
+
+    return subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-i", str(wav), "-t", "0.4",
+                           "-f", "mp3", "-"], capture_output=True, check=True).stdout
+
+
+@pytest.mark.parametrize("kind", ["wav", "mp3"])
+def test_recording_reader(kind, vowels_wav):
+    import soundfile as sf
+
+    from visemeface.speech.audio import read_audio
+
+    if kind == "wav":
+        buf = io.BytesIO()
+        x, rate = sf.read(str(vowels_wav), frames=4000)
+        sf.write(buf, x, rate, format="WAV", subtype="PCM_16")
+        seed = buf.getvalue()
+    else:
+        seed = _mp3_bytes(vowels_wav)
+
+    def read(p):
+        samples, rate = read_audio(p)
+        assert samples.size and rate > 0 and np.all(np.isfinite(samples))
+    fuzz(f"recording ({kind.upper()})", read, seed, f".{kind}", 40)
+
+
+# ---------------------------------------------------------------------------------------------- preview, retarget
+def test_preview_glb_reader(tmp_path):
+    from visemeface.export.gltf import write_morph_animation_glb
+    from visemeface.export.preview import glb_duration
+
+    tri = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    write_morph_animation_glb(tmp_path / "a.glb", tri, [[0, 1, 2]], tri[None] * 0.1, ["m"], [0.0, 1.0],
+                              [[0.0], [1.0]])
+    seed = (tmp_path / "a.glb").read_bytes()
+
+    def read(p):
+        d = glb_duration(p.read_bytes())
+        assert np.isfinite(d) and d >= 0
+    fuzz("preview glb (glTF)", read, seed, ".glb", 60)
+
+
+@pytest.mark.parametrize("table", ["arkit.csv", "vrm.csv", "action_units.csv", "phoneme_classes.csv"])
+def test_retarget_data_readers(table, rig, monkeypatch, tmp_path):
+    """The recipe tables of data/retarget/ (edited by hand to add a shape): read, or refused with the line."""
+    from visemeface.resources import data_path
+    from visemeface.retarget import recipes
+
+    seed = data_path("retarget", table).read_bytes()
+    real = recipes.data_path
+
+    def read(p):
+        monkeypatch.setattr(recipes, "data_path", lambda *parts: p if parts[-1] == table else real(*parts))
+        recipes.action_units.cache_clear()
+        recipes.phoneme_classes.cache_clear()
+        try:
+            name = {"arkit.csv": "arkit", "vrm.csv": "vrm", "phoneme_classes.csv": "oculus"}.get(table, "arkit")
+            recipes.vocabulary(name, rig)
+            if table == "phoneme_classes.csv":
+                recipes.phoneme_classes()
+        finally:
+            recipes.action_units.cache_clear()
+            recipes.phoneme_classes.cache_clear()
+    fuzz(f"retarget {table}", read, seed, ".csv", 25)
+
+
+# ---------------------------------------------------------------------------------------------- well-formed, hostile
+JSON_VALUES = st.recursive(st.none() | st.booleans() | st.integers(-2**70, 2**70) | st.floats() | st.text(max_size=6),
+                           lambda inner: st.lists(inner, max_size=3) | st.dictionaries(
+                               st.sampled_from(["settings", "accessors", "animations", "samplers", "input", "max",
+                                                "clip", "x"]), inner, max_size=4), max_leaves=12)
+
+
+def test_well_formed_json_with_any_contents(tmp_path):
+    """Readable JSON of any shape where the readers expect an object: a clip record, a glb's JSON chunk."""
+    import struct
+
+    from visemeface.batch.clip import CLIP_RECORD, clip_state
+    from visemeface.batch.manifest import Job
+    from visemeface.export.preview import glb_duration
+
+    job = Job(clip="c1", text="one")
+    (tmp_path / "c1").mkdir()
+
+    def record(p):
+        (tmp_path / "c1" / CLIP_RECORD).write_bytes(p.read_bytes())
+        assert clip_state(job, tmp_path) == "other"
+
+    def glb(p):
+        doc = p.read_bytes()
+        glb_duration(b"glTF" + struct.pack("<II", 2, 20 + len(doc)) + struct.pack("<I4s", len(doc), b"JSON") + doc)
+
+    @settings(FUZZ, max_examples=60)
+    @given(JSON_VALUES)
+    def run(value):
+        data = json.dumps(value).encode()
+        check_reader("batch clip record (any JSON)", record, data, ".json")
+        check_reader("preview glb (any JSON chunk)", glb, data, ".json")
+    run()
+
+
+CELLS = st.sampled_from(["", "nan", "inf", "-1", "0", "1e309", "99999999999999999999", "t.txt", "../t.txt", "/",
+                         "happiness=nan", "happiness=2", "happiness", "zz=0.5", "video", "video gltf", "obj;pc2",
+                         "none", "sticky", "face", "mouth", "linear", "a b", "\x00", "é", '"', "c1"])
+
+
+def test_batch_manifest_rows_with_hostile_cells(tmp_path):
+    """A well-formed manifest whose cells are the values that break readers: each row is a Job or a one-line
+    BadRow, and the manifest is never refused whole for a bad cell."""
+    import csv
+
+    from visemeface.batch.manifest import COLUMNS, BadRow, Job, read_manifest
+
+    (tmp_path / "t.txt").write_text("0.00 0.05 _\n0.05 0.25 aa\n0.25 0.30 _\n")
+
+    @settings(FUZZ, max_examples=80)
+    @given(st.lists(st.fixed_dictionaries({c: CELLS for c in COLUMNS}), min_size=1, max_size=4))
+    def run(rows):
+        path = tmp_path / "m.csv"
+        with open(path, "w", newline="", encoding="utf-8") as fh:
+            w = csv.DictWriter(fh, fieldnames=COLUMNS)
+            w.writeheader()
+            w.writerows(rows)
+
+        def read(p):
+            out = read_manifest(path, {"size": 64})
+            assert len(out) == sum(any(r.values()) for r in rows)
+            assert all(isinstance(r, Job) or (isinstance(r, BadRow) and "\n" not in r.error) for r in out)
+        check_reader("batch manifest (hostile cells)", read, b"", ".csv")
+    run()

@@ -191,7 +191,7 @@ def read_profile(path: str | Path) -> pd.DataFrame:
         finite = np.isfinite(df[c].to_numpy(float))
         if not finite.all():
             row = int(np.argmin(finite))
-            raise InputError(f"column {c!r} has a non-finite value {df[c].iloc[row]!r}", path, row + 2)
+            raise InputError(f"column {c!r} has a non-finite value {float(df[c].iloc[row]):g}", path, row + 2)
     t = df["time"].to_numpy(float)
     if len(t) < 2:
         raise InputError("a profile needs at least 2 frames", path)

@@ -49,7 +49,7 @@ def clip_state(job: Job, outdir) -> str:
         record = json.loads((folder / CLIP_RECORD).read_text())
     except (OSError, ValueError):
         return "other"
-    return "done" if record.get("settings") == job.settings() else "other"
+    return "done" if isinstance(record, dict) and record.get("settings") == job.settings() else "other"
 
 
 @functools.lru_cache(maxsize=2)

@@ -141,6 +141,11 @@ def check_settings(s: dict, base: Path = Path(".")) -> dict:
 
     out = dict(s)
     out["transcript"] = _file(s.get("transcript"), base, "transcript")
+    from visemeface.speech.audio import is_recording
+
+    if out["transcript"] is not None and is_recording(out["transcript"]):   # was "not UTF-8 text (byte 0x..)"
+        raise InputError("a recording is no transcript: put it in the audio column and its words in text",
+                         out["transcript"])
     out["audio"] = _file(s.get("audio"), base, "audio file")
     out["text"] = (str(s["text"]).strip() or None) if s.get("text") is not None else None
     if (out["transcript"] is None) == (out["text"] is None):

@@ -20,7 +20,9 @@ per task, so the workers do not oversubscribe the cores.
 from __future__ import annotations
 
 import csv
+import logging
 import os
+import signal
 import uuid
 from collections.abc import Callable, Iterable
 from pathlib import Path
@@ -56,8 +58,22 @@ def local_client(workers: int | None = None):
     from distributed import Client, LocalCluster
 
     n = workers or os.cpu_count() or 1
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0")
+    # The worker processes inherit an ignored SIGINT: a terminal's Ctrl-C reaches the whole process group,
+    # and each worker printed a KeyboardInterrupt traceback; this process alone stops the batch.
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if _main_thread() else None
+    try:
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
+                               silence_logs=logging.ERROR)   # a cancelled task on Ctrl-C is no warning
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
     return Client(cluster)
+
+
+def _main_thread() -> bool:
+    import threading
+
+    return threading.current_thread() is threading.main_thread()
 
 
 def run(jobs, outdir, client=None, workers: int | None = None, resume: bool = False, force: bool = False,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import sys
 from pathlib import Path
@@ -166,6 +167,10 @@ def run_command(args) -> int:
         return _write_grid(args)
     if args.workers is not None and args.workers < 1:
         raise InputError(f"--workers must be at least 1, got {args.workers}")
+    cores = os.cpu_count() or 1
+    if args.workers is not None and args.workers > 4 * cores:   # each a Python process with its own renderer
+        raise InputError(f"--workers {args.workers} is over 4 processes a core ({cores} cores here); "
+                         "more only compete for them (use --scheduler for a bigger cluster)")
     settings = _settings(args)
     outdir = check_outdir(args.output or Path.cwd() / args.manifest.stem, args.resume, args.force)
     jobs = read_manifest(args.manifest, settings)

@@ -30,7 +30,7 @@ def register(subparsers) -> None:
 
 
 def _fmt(v: float, spec: str) -> str:
-    return format(v, spec) if v == v else format("nan", spec.split(".")[0].rstrip("f") + "s")
+    return format(v, spec) if v == v else format("nan", ">" + spec.split(".")[0].rstrip("f") + "s")
 
 
 def run(args) -> int:

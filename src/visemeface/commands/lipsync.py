@@ -60,8 +60,8 @@ def recording_utterance(recording: Path, text, text_file, quiet: bool = False):
     """Utterance of a recording: aligned to its words if any, else recognised."""
     from visemeface.speech.align import utterance_from_audio
 
-    words, _ = text_of(recording, text, text_file, quiet)
-    return utterance_from_audio(recording, words)
+    words, path = text_of(recording, text, text_file, quiet)
+    return utterance_from_audio(recording, words, text_where=path)
 
 
 def register(subparsers) -> None:

@@ -49,8 +49,8 @@ def run(args) -> int:
     data = args.glb.read_bytes()
     try:
         duration = glb_duration(data)
-    except (InputError, ValueError, KeyError, IndexError, UnicodeDecodeError) as exc:
-        raise InputError(f"not a readable binary glTF ({exc})", args.glb) from None
+    except InputError as exc:
+        raise InputError(str(exc), args.glb) from None
     if args.audio is not None:
         if args.audio.suffix.lower() not in AUDIO_TYPES:
             raise InputError(f"a browser cannot play this sound; use one of {', '.join(AUDIO_TYPES)}", args.audio)

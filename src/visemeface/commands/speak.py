@@ -173,6 +173,8 @@ def run(args) -> int:
     for target in [t for s in sinks for t in s.targets()] + ([saved.path] if saved is not None else []):
         if Path(target).resolve() in inputs:
             raise InputError("the output would overwrite an input; name another with -o", target)
+    if saved is not None and Path(saved.path).resolve() in {Path(t).resolve() for s in sinks for t in s.targets()}:
+        raise InputError("--save-transcript and another output are the same path", saved.path)
     utterance, recording = _read_input(args)
     with tempfile.TemporaryDirectory(prefix="visemeface-") as folder:
         sound = None if recording is None else media_wav(recording, folder)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import base64
 import html
+import math
 import json
 import struct
 from pathlib import Path
@@ -166,14 +167,20 @@ def preview_html(glb: bytes, audio: bytes | None = None, audio_type: str = "audi
 def glb_duration(glb: bytes) -> float:
     """Largest keyframe time of a .glb's animations (0 when none): checks the container too."""
     if len(glb) < 20 or glb[:4] != b"glTF":
-        raise InputError("not a binary glTF (.glb) file")
+        raise InputError("not a readable binary glTF (no glTF header)")
     length, kind = struct.unpack_from("<I4s", glb, 12)
     if kind != b"JSON":
-        raise InputError("binary glTF without a JSON chunk")
-    doc = json.loads(glb[20:20 + length])
-    times = [doc["accessors"][s["input"]].get("max", [0.0])[0]
-             for a in doc.get("animations", []) for s in a["samplers"]]
-    return float(max(times, default=0.0))
+        raise InputError("not a readable binary glTF (no JSON chunk)")
+    try:
+        doc = json.loads(glb[20:20 + length])
+        times = [float(doc["accessors"][s["input"]].get("max", [0.0])[0])
+                 for a in doc.get("animations", []) for s in a["samplers"]]
+    except (ValueError, KeyError, IndexError, TypeError, AttributeError) as exc:
+        raise InputError(f"not a readable binary glTF ({type(exc).__name__}: {str(exc)[:60]})") from None
+    duration = float(max(times, default=0.0))
+    if not (math.isfinite(duration) and duration >= 0):
+        raise InputError(f"not a readable binary glTF (animation time {duration:g} s)")
+    return duration
 
 
 def write_preview(path, glb: bytes, audio_path=None, title: str = "visemeface", force: bool = False) -> None:

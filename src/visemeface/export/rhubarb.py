@@ -108,6 +108,11 @@ class RhubarbSink(Sink):
     def __init__(self, path, force: bool = False, **settings):
         super().__init__(path, force, **settings)
         self.dat_fps = _fps(settings.get("dat_fps"))
+        if self.path.suffix.lower() != ".dat":
+            for dest, flag in (("dat_fps", "--dat-fps"), ("dat_preston_blair", "--dat-preston-blair")):
+                if settings.get(dest) not in (None, False):
+                    raise InputError(f"{flag} is for a .dat file; this one is {self.path.suffix or 'without suffix'}",
+                                     self.path)
 
     def open(self, run) -> None:
         super().open(run)

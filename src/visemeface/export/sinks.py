@@ -180,9 +180,13 @@ def sinks_from_args(args, force: bool, skip: tuple[str, ...] = (), video: Path |
         path = getattr(args, dest_of(cls), None)
         if path == BESIDE_VIDEO:
             path = Path(video).with_suffix(cls.beside_video)
+        own = {kw["dest"]: getattr(args, kw["dest"], kw.get("default")) for _, kw in cls.arguments}
         if path is not None:
-            own = {kw["dest"]: getattr(args, kw["dest"], kw.get("default")) for _, kw in cls.arguments}
             out.append(cls(path, force=force, **settings, **own))
+            continue
+        given = [f[0] for f, kw in cls.arguments if own[kw["dest"]] not in (None, False, kw.get("default"))]
+        if given:                               # an option of an output not asked for: never silently ignored
+            raise InputError(f"{given[0]} is an option of {option_of(cls)}, which is not given")
     return out
 
 

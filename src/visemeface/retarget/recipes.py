@@ -40,10 +40,25 @@ OCULUS = ("sil", "PP", "FF", "TH", "DD", "kk", "CH", "SS", "nn", "RR", "aa", "E"
 SIDE_BLEND = 0.5
 
 
+#: The columns each recipe table must have (``side`` is optional).
+_COLUMNS = {"action_units.csv": ("au", "recipe"), "phoneme_classes.csv": ("dectalk", "oculus", "rhubarb")}
+
+
 def _rows(name: str) -> tuple[Path, list[dict]]:
+    """A recipe table's rows (every cell a stripped string), or :class:`InputError` naming the file."""
     path = data_path("retarget", name)
-    with open(path, newline="", encoding="utf-8") as fh:
-        return path, list(csv.DictReader(fh))
+    need = _COLUMNS.get(name, ("name", "recipe", "note"))
+    try:
+        with open(path, newline="", encoding="utf-8") as fh:
+            reader = csv.DictReader(fh)
+            missing = [c for c in need if c not in (reader.fieldnames or ())]
+            if missing:
+                raise InputError(f"the header row lacks the column {missing[0]!r}", path, 1)
+            rows = [{k: (v or "").strip() for k, v in r.items() if isinstance(k, str) and not isinstance(v, list)}
+                    for r in reader]
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise InputError(f"not a UTF-8 CSV table ({type(exc).__name__})", path) from None
+    return path, rows
 
 
 def parse_recipe(text: str, path: Path | None = None, line: int | None = None) -> list[tuple[str, float]]:

@@ -117,8 +117,6 @@ def _words_of(text: str, where):
             words.append(value)
         elif kind == "emotion":
             tags.append((len(words), *value))
-    if not words:
-        raise InputError("no words in the text to align", where)
     return words, tags
 
 
@@ -141,10 +139,24 @@ def _dictionary_keys(decoder, words) -> list[str]:
     return keys
 
 
-def _force_align(pcm: bytes, words, where):
-    """[(word, start, end, score, [(ARPAbet, start, end)])] of the words in the audio (seconds)."""
+#: Standard deviation (16-bit PCM steps, about -70 dB of full scale) of the seeded dither of a second
+#: alignment try. pocketsphinx's phone-level pass sometimes finds no path through clean speech (the GRID
+#: clip encoded as an MP3 by ffmpeg's defaults failed, its WAV aligned); a trace of noise lets it through,
+#: boundaries within 10 ms of the WAV's (the last end 30 ms). Chosen by trying 3, 10 and 30 steps
+#: (4/5, 5/5, 5/5 seeds aligned), not tuned further.
+RETRY_DITHER = 10.0
+
+
+def _dithered(pcm: bytes) -> bytes:
+    x = np.frombuffer(pcm, dtype="<i2").astype(np.float64)
+    x += np.random.default_rng(0).normal(0.0, RETRY_DITHER, x.size)
+    return np.clip(np.round(x), -32768, 32767).astype("<i2").tobytes()
+
+
+def _alignment(pcm: bytes, words):
+    """pocketsphinx's word and phone alignment of ``words`` (two passes), or None if it found none."""
     decoder = _decoder()
-    keys = _dictionary_keys(decoder, words)
+    keys = _dictionary_keys(decoder, words)     # adds the words it lacks to this decoder's dictionary
     try:
         decoder.set_align_text(" ".join(keys))
         for second in (False, True):
@@ -155,16 +167,83 @@ def _force_align(pcm: bytes, words, where):
             decoder.end_utt()
         alignment = decoder.get_alignment()
     except RuntimeError:
-        raise InputError("the text could not be aligned to the audio (does it match the recording?)",
-                         where) from None
-    out = []
-    if sum(w.name not in _SILENCE for w in alignment) != len(keys):
+        return None
+    return alignment if sum(w.name not in _SILENCE for w in alignment) == len(keys) else None
+
+
+def _force_align(pcm: bytes, words, where):
+    """[(word, start, end, score, [(ARPAbet, start, end)])] of the words in the audio (seconds)."""
+    alignment = _alignment(pcm, words)
+    if alignment is None:                       # one more try with a trace of noise (RETRY_DITHER)
+        alignment = _alignment(_dithered(pcm), words)
+    if alignment is None:
         raise InputError("the text could not be aligned to the audio (does it match the recording?)", where)
+    out = []
     for w in alignment:
         phones = [(p.name, p.start / FRAME_RATE, (p.start + p.duration) / FRAME_RATE) for p in w]
         out.append((w.name.split("(")[0], w.start / FRAME_RATE, (w.start + w.duration) / FRAME_RATE, w.score,
                     phones))
     return out
+
+
+#: Recordings longer than this (s) are decoded in a child process. pocketsphinx holds the GIL for a whole
+#: decode (about 4 % of the audio's length), so Ctrl-C could not end the run until it finished; a child
+#: can be ended at once. Shorter ones decode here (a child costs about 0.5 s to start).
+CHILD_DECODE_S = 20.0
+
+
+def _decode(fn, pcm: bytes, *args):
+    """``fn(pcm, *args)``; in a child process for long recordings, ended at once on Ctrl-C or SIGTERM.
+
+    The child is a fresh interpreter (never a fork: a forked numba thread pool can hang) in its own
+    session, so a terminal's Ctrl-C reaches only this process, which kills it; it also dies with this
+    process (SIGKILL included) instead of decoding on and printing a broken pipe later.
+    """
+    if len(pcm) < CHILD_DECODE_S * MODEL_RATE * 2:
+        return fn(pcm, *args)
+    import pickle
+    import subprocess
+    import sys
+
+    package_root = str(Path(__file__).resolve().parents[2])     # importable however this process found it
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [package_root, os.environ.get("PYTHONPATH")])))
+    proc = subprocess.Popen([sys.executable, "-c", "from visemeface.speech.align import _child; _child()"],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            start_new_session=True, env=env)
+    try:
+        out, err = proc.communicate(pickle.dumps((os.getpid(), fn.__name__, pcm, args)))
+    except BaseException:
+        proc.kill()
+        proc.wait()
+        raise
+    if proc.returncode != 0 or not out:
+        raise RuntimeError(f"the alignment process failed (exit {proc.returncode}): "
+                           f"{err.decode(errors='replace').strip()[-300:]}")
+    ok, value = pickle.loads(out)
+    if not ok:
+        raise value
+    return value
+
+
+def _child() -> None:
+    """The child of :func:`_decode`: reads (parent pid, function name, pcm, args), writes (ok, result)."""
+    import ctypes
+    import pickle
+    import signal
+    import sys
+
+    parent, name, pcm, args = pickle.loads(sys.stdin.buffer.read())
+    try:                                        # die with the parent (Linux); elsewhere it finishes alone
+        ctypes.CDLL(None).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+    if os.getppid() != parent:
+        return
+    try:
+        result = (True, {"phone_loop": phone_loop, "_force_align": _force_align}[name](pcm, *args))
+    except InputError as exc:
+        result = (False, exc)
+    sys.stdout.buffer.write(pickle.dumps(result))
 
 
 def phone_loop(pcm: bytes) -> list[tuple[str, float, float]]:
@@ -213,7 +292,8 @@ def _check_match(aligned, where) -> float:
     return per_frame
 
 
-def utterance_from_audio(audio, text: str | None = None, *, where=None, check_text: bool = True) -> Utterance:
+def utterance_from_audio(audio, text: str | None = None, *, where=None, check_text: bool = True,
+                         text_where=None) -> Utterance:
     """Timed phones (and words, emotion keys) of a recording.
 
     Parameters
@@ -227,6 +307,9 @@ def utterance_from_audio(audio, text: str | None = None, *, where=None, check_te
     check_text : bool
         Refuse text that does not match the audio (:data:`MISMATCH_SCORE`); off for audio known
         to say the text (synthesised speech, which scores poorly on a model of human voices).
+    text_where : str or Path, optional
+        The file the text came from, named (with the line) in errors about the text itself (a bad
+        emotion tag); None: the errors name no file (never the audio's "line 1").
 
     Returns
     -------
@@ -243,12 +326,14 @@ def utterance_from_audio(audio, text: str | None = None, *, where=None, check_te
     total = samples.size / rate
     pcm = model_pcm(samples, rate, where)
     if text is None:
-        seg = _segments(phone_loop(pcm), total, where)
+        seg = _segments(_decode(phone_loop, pcm), total, where)
         if not (seg["phoneme"] != "_").any():
             raise InputError("no phones recognised in the audio", where)
         return Utterance(seg, source_format="recognised")
-    words, tags = _words_of(text, where)
-    aligned = _force_align(pcm, words, where)
+    words, tags = _words_of(text, text_where)
+    if not words:
+        raise InputError("no words in the text to align", text_where or where)
+    aligned = _decode(_force_align, pcm, words, where)
     if check_text:
         _check_match(aligned, where)
     from visemeface.speech.g2p import cmu_pronunciations

@@ -24,6 +24,8 @@ recording whose peak is less than
 
 from __future__ import annotations
 
+import contextlib
+import os
 import subprocess
 from pathlib import Path
 
@@ -73,6 +75,25 @@ def _ffmpeg_decode(path: Path) -> tuple[np.ndarray, int]:
     return np.frombuffer(proc.stdout, dtype="<f4").astype(np.float64), rate
 
 
+@contextlib.contextmanager
+def native_stderr_quiet():
+    """Silence what C libraries print on file descriptor 2 (libmpg123's "warning: Cannot read next
+    header" on a fake MP3) while libsndfile reads: the user sees one line, the InputError's."""
+    try:
+        saved = os.dup(2)
+    except OSError:                     # no stderr at all
+        yield
+        return
+    null = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(null, 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(null)
+
+
 def read_audio(path) -> tuple[np.ndarray, int]:
     """Decode a recording to mono float64 samples and its sample rate.
 
@@ -99,7 +120,8 @@ def read_audio(path) -> tuple[np.ndarray, int]:
     if not path.is_file():
         raise InputError("audio file not found", path)
     try:
-        data, rate = sf.read(str(path), dtype="float64", always_2d=True)
+        with native_stderr_quiet():
+            data, rate = sf.read(str(path), dtype="float64", always_2d=True)
         samples = data.mean(axis=1)
     except Exception:  # not a format libsndfile knows: let ffmpeg try (video tracks, m4a...)
         samples, rate = _ffmpeg_decode(path)
@@ -124,8 +146,9 @@ def audio_duration(path) -> float:
     if not path.is_file():
         raise InputError("audio file not found", path)
     try:
-        info = sf.info(str(path))
-        head, _ = sf.read(str(path), frames=min(info.frames, 60 * info.samplerate), dtype="float32")
+        with native_stderr_quiet():
+            info = sf.info(str(path))
+            head, _ = sf.read(str(path), frames=min(info.frames, 60 * info.samplerate), dtype="float32")
     except Exception:  # not a libsndfile format: decode it all (videos: minutes, not hours)
         samples, rate = read_audio(path)
         return samples.size / rate
