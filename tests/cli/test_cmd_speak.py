@@ -62,7 +62,7 @@ def test_check_audio(tmp_path):
 
 
 def test_parse_emotions_checks_names():
-    from visemeface.commands.speak import parse_emotions
+    from visemeface.animate import parse_emotions
 
     assert parse_emotions(["happiness=0.6", "anger"], ["happiness", "anger"]) == {"happiness": 0.6, "anger": 1.0}
     with pytest.raises(InputError, match="did you mean: happiness"):

@@ -201,3 +201,42 @@ def print_table(head: tuple[str, ...], rows: list[tuple], as_csv: bool = False, 
         print("  ".join(c.ljust(w) for c, w in zip(r[:-1], widths)) + "  " + last[0])
         for more in last[1:]:
             print(" " * indent + more)
+
+
+# ------------------------------------------------------------------ the words of a recording (speak, lipsync)
+def add_text_arguments(g) -> None:
+    """``--text``, ``--text-file`` (the words of a recording)."""
+    g.add_argument("--text", metavar="WORDS", help="what the recording says: forced alignment (accurate); "
+                   "default: the text of a same-named .txt beside the recording, else phone recognition")
+    g.add_argument("--text-file", type=Path, metavar="TXT", help="read the words from a text file")
+
+
+def text_of(recording: Path, text, text_file, quiet: bool = False):
+    """The words for ``recording``: ``text``, the file's, a same-named .txt beside it, or None."""
+    from visemeface.errors import InputError
+    from visemeface.textfile import read_text
+
+    if text is not None and text_file is not None:
+        raise InputError("--text and --text-file both give the words; give one")
+    if text is not None:
+        if not text.strip():
+            raise InputError("--text is empty")
+        return text, None
+    beside = recording.with_suffix(".txt")
+    path = text_file if text_file is not None else (beside if beside.is_file() else None)
+    if path is None:
+        return None, None
+    words = read_text(path, "text file")
+    if text_file is None and not quiet:
+        import sys
+
+        print(f"visemeface: aligning the words of {path}", file=sys.stderr)
+    return words, path
+
+
+def recording_utterance(recording: Path, text, text_file, quiet: bool = False):
+    """Utterance of a recording: aligned to its words if any, else recognised."""
+    from visemeface.speech.align import utterance_from_audio
+
+    words, path = text_of(recording, text, text_file, quiet)
+    return utterance_from_audio(recording, words, text_where=path)

@@ -89,7 +89,7 @@ def run(args) -> int:
     from visemeface.analysis.profiles import analyze_source, plot_profiles, write_profile
     from visemeface.analysis.video import open_frames, parse_box, read_sidecar, sidecar_path
     from visemeface.errors import InputError
-    from visemeface.outputs import atomic_dir, check_new, check_suffix, progress
+    from visemeface.outputs import atomic_dir, check_new, check_suffix
 
     detector = OpeningDetector(threshold=_threshold(args.threshold), hull=args.hull, teeth=args.teeth,
                                min_area=args.min_area, pad=_pad(args.pad), method=args.method,

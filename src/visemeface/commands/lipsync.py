@@ -11,6 +11,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from visemeface.commands import _options as opt
+
 ORDER = 22
 
 EPILOG = """\
@@ -26,44 +28,6 @@ Outputs (by suffix): .txt timed phones, .lab HTK labels, .TextGrid (words and ph
 """
 
 
-def add_text_arguments(g) -> None:
-    """``--text``, ``--text-file`` (the words of a recording)."""
-    g.add_argument("--text", metavar="WORDS", help="what the recording says: forced alignment (accurate); "
-                   "default: the text of a same-named .txt beside the recording, else phone recognition")
-    g.add_argument("--text-file", type=Path, metavar="TXT", help="read the words from a text file")
-
-
-def text_of(recording: Path, text, text_file, quiet: bool = False):
-    """The words for ``recording``: ``text``, the file's, a same-named .txt beside it, or None."""
-    from visemeface.errors import InputError
-    from visemeface.textfile import read_text
-
-    if text is not None and text_file is not None:
-        raise InputError("--text and --text-file both give the words; give one")
-    if text is not None:
-        if not text.strip():
-            raise InputError("--text is empty")
-        return text, None
-    beside = recording.with_suffix(".txt")
-    path = text_file if text_file is not None else (beside if beside.is_file() else None)
-    if path is None:
-        return None, None
-    words = read_text(path, "text file")
-    if text_file is None and not quiet:
-        import sys
-
-        print(f"visemeface: aligning the words of {path}", file=sys.stderr)
-    return words, path
-
-
-def recording_utterance(recording: Path, text, text_file, quiet: bool = False):
-    """Utterance of a recording: aligned to its words if any, else recognised."""
-    from visemeface.speech.align import utterance_from_audio
-
-    words, path = text_of(recording, text, text_file, quiet)
-    return utterance_from_audio(recording, words, text_where=path)
-
-
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "lipsync",
@@ -73,7 +37,7 @@ def register(subparsers) -> None:
         "`visemeface speak` animates.",
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("recording", type=Path, metavar="RECORDING", help="sound file or video with speech")
-    add_text_arguments(p)
+    opt.add_text_arguments(p)
     p.add_argument("-o", "--output", type=Path, metavar="OUT",
                    help="transcript to write: .txt, .lab, .TextGrid or .json (default RECORDING's stem + "
                    ".TextGrid in the current folder)")
@@ -92,7 +56,7 @@ def run(args) -> int:
     out = args.output if args.output is not None else Path.cwd() / (args.recording.stem + ".TextGrid")
     format_of(out)
     check_new(out, args.force)
-    utterance = recording_utterance(args.recording, args.text, args.text_file, args.quiet)
+    utterance = opt.recording_utterance(args.recording, args.text, args.text_file, args.quiet)
     write_transcript(utterance, out, force=args.force)
     if not args.quiet:
         seg = utterance.segments

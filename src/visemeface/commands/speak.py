@@ -33,8 +33,6 @@ the frames there whose settings match; with --physics the simulation saves its
 state after every frame in OUT.mp4.checkpoint/ and --resume continues from it.
 """
 
-from visemeface.animate import MAX_UTTERANCE_S, parse_emotions  # noqa: F401  (their home: visemeface.animate)
-
 
 def add_animation_arguments(p: argparse.ArgumentParser, video_default: str) -> None:
     """Options shared by ``speak`` and ``say``: animation, face, physics, rendering, outputs."""
@@ -116,9 +114,8 @@ def register(subparsers) -> None:
     src.add_argument("--rate", type=float, metavar="WPM",
                      help="plain-text transcripts only: speaking rate in words per minute "
                      "(with --audio the text is timed to the recording instead)")
-    from visemeface.commands.lipsync import add_text_arguments
 
-    add_text_arguments(src)
+    opt.add_text_arguments(src)
     src.add_argument("--save-transcript", type=Path, metavar="OUT",
                      help="also write the timed phones read or found: .txt, .lab, .TextGrid or .json")
     add_animation_arguments(p, "TRANSCRIPT's stem + .mp4")
@@ -143,15 +140,13 @@ def _read_input(args):
     from visemeface.speech.transcripts import read_utterance
 
     if is_recording(args.transcript):
-        from visemeface.commands.lipsync import recording_utterance
-
         if args.audio is not None:
             raise InputError("--audio: a recording is its own sound; leave --audio out")
         bad = [o for o, v in (("--format", args.format != "auto"), ("--tier", args.tier), ("--rate", args.rate),
                               ("--alphabet", args.alphabet)) if v]
         if bad:
             raise InputError(f"{bad[0]} applies to transcripts, not to a recording")
-        return recording_utterance(args.transcript, args.text, args.text_file, args.quiet), args.transcript
+        return opt.recording_utterance(args.transcript, args.text, args.text_file, args.quiet), args.transcript
     if args.text is not None or args.text_file is not None:
         raise InputError("--text/--text-file give the words of a recording; the input is a transcript")
     fmt = None if args.format == "auto" else args.format

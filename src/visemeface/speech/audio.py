@@ -94,6 +94,14 @@ def native_stderr_quiet():
         os.close(null)
 
 
+def _check_sound(n_samples, rate, samples, path) -> None:
+    """A recording holds samples at a positive rate, all finite (``samples``: those read)."""
+    if n_samples <= 0 or rate <= 0:
+        raise InputError("audio file holds no samples", path)
+    if not np.all(np.isfinite(samples)):
+        raise InputError("audio holds non-finite samples (NaN or infinity)", path)
+
+
 def read_audio(path) -> tuple[np.ndarray, int]:
     """Decode a recording to mono float64 samples and its sample rate.
 
@@ -125,10 +133,7 @@ def read_audio(path) -> tuple[np.ndarray, int]:
         samples = data.mean(axis=1)
     except Exception:  # not a format libsndfile knows: let ffmpeg try (video tracks, m4a...)
         samples, rate = _ffmpeg_decode(path)
-    if samples.size == 0 or rate <= 0:
-        raise InputError("audio file holds no samples", path)
-    if not np.all(np.isfinite(samples)):
-        raise InputError("audio holds non-finite samples (NaN or infinity)", path)
+    _check_sound(samples.size, rate, samples, path)
     if samples.size / rate > MAX_SECONDS:
         raise InputError(f"audio lasts {samples.size / rate:.0f} s, over the {MAX_SECONDS} s limit", path)
     return samples, int(rate)
@@ -152,10 +157,7 @@ def audio_duration(path) -> float:
     except Exception:  # not a libsndfile format: decode it all (videos: minutes, not hours)
         samples, rate = read_audio(path)
         return samples.size / rate
-    if info.frames <= 0 or info.samplerate <= 0:
-        raise InputError("audio file holds no samples", path)
-    if not np.all(np.isfinite(head)):
-        raise InputError("audio holds non-finite samples (NaN or infinity)", path)
+    _check_sound(info.frames, info.samplerate, head, path)
     return info.frames / info.samplerate
 
 
