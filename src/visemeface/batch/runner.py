@@ -162,6 +162,8 @@ def _submit(todo, outdir: Path, client, workers, force, show_progress, rows, on_
                     row = fut.result()
                 except Exception as e:  # the task's worker died too often (KilledWorker), or the cluster went
                     row = report_row(job.clip, "failed", 0.0, f"{type(e).__name__}: {e}")
+                if row["status"] == "skipped":  # a retry after a worker died holding the result:
+                    row = report_row(job.clip, "done", row["seconds"])  # this run made the clip
                 rows[i] = row
                 bar.update(1)
                 if on_result is not None:
