@@ -269,18 +269,20 @@ def test_glue_file_layouts(tmp_path):
         sv.read_glue_file(p, np.zeros(3))
 
 
-@pytest.mark.parametrize("refine,soften,viscosity", [(1, 0.0, np.inf), (4, 0.0, np.inf), (4, 0.05, np.inf),
-                                                    (4, 0.0, 3e-4), (1, 0.0, 3e-3)])
-def test_compiled_film_follows_the_numpy_reference(refine, soften, viscosity):
+@pytest.mark.parametrize("refine,soften,viscosity,strand,rupture", [
+    (1, 0.0, np.inf, 0.0, 0.0), (4, 0.0, np.inf, 0.0, 0.0), (4, 0.05, np.inf, 0.0, 0.0), (4, 0.0, 3e-4, 0.0, 0.0),
+    (1, 0.0, 3e-3, 0.0, 0.0), (4, 0.0, np.inf, 1e-4, 0.0), (1, 0.0, 3e-3, 1e-3, 0.0), (4, 0.0, np.inf, 0.0, 3e-6),
+    (1, 0.0, np.inf, 1e-4, 3e-6)])
+def test_compiled_film_follows_the_numpy_reference(refine, soften, viscosity, strand, rupture):
     from film_reference import reference_step
     rng = np.random.default_rng(0)
-    params = sv.SalivaParams(squeeze=0.25, soften=soften, viscosity=viscosity)
+    params = sv.SalivaParams(squeeze=0.25, soften=soften, viscosity=viscosity, strand=strand, rupture_time=rupture)
     a, X, sa = _films([0.0, 0.08, 0.3], params, n=3, refine_to=3 * refine)
     b, _, sb = _films([0.0, 0.08, 0.3], params, n=3, refine_to=3 * refine)
     assert a.n_elements == 3 * refine
     shear = np.array([[1.0, 0.3, 0.0], [0.0, 1.0, 0.0], [0.1, 0.0, 0.8]])
     Xc = X.reshape(3, 8, 3) - X.reshape(3, 8, 3).mean(axis=1, keepdims=True)
-    seen, flowed = set(), False
+    seen, flowed, softened = set(), False, False
     for step, lam in enumerate([1.0, 1.02, 1.05, 1.2, 1.1, 0.99, 0.3, 0.9, 1.03, 1.5]):
         F = np.stack([_stretched(_box(), lam + 0.01 * i)[0] @ shear for i in range(3)])
         u = np.einsum("eij,eaj->eai", F - np.eye(3), Xc).reshape(-1, 3)
@@ -293,10 +295,13 @@ def test_compiled_film_follows_the_numpy_reference(refine, soften, viscosity):
             assert sa[k].tolist() == sb[k].tolist()
         np.testing.assert_allclose(sa["stored"], sb["stored"], rtol=1e-9, atol=1e-15)
         np.testing.assert_allclose(sa["flow"], sb["flow"], rtol=1e-9, atol=1e-15)
+        np.testing.assert_allclose(sa["damage"], sb["damage"], rtol=1e-9, atol=1e-15)
+        softened = softened or bool(((sa["damage"] > 0) & (sa["damage"] < 1)).any())
         flowed = flowed or bool(sa["flow"].any())
         seen.update(zip(sa["broken"].tolist(), sa["dry"].tolist()))
     assert seen == {(False, False), (True, False), (True, True)}      # intact, broken and squeezed out
     assert flowed == np.isfinite(viscosity)                           # a viscous film flows, a solid one not
+    assert softened == (strand > 0 or rupture > 0)                    # a cohesive film softens before it breaks
 
 
 def test_film_slabs_tile_their_hexahedron_and_their_forces_add_up():

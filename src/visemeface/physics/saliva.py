@@ -121,6 +121,18 @@ class SalivaParams:
         δ_flow / slab thickness.
     film_thickness : float
         h₀ (m), the real saliva film's thickness (seed 000 §3.4.2: 0.07–0.1 mm).
+    strand : float
+        0 (default): the seed's brittle film (breaks at Q = Z, its pull then decays).
+        > 0 (m): a cohesive (bilinear traction–separation) law: past Z the film is drawn
+        into strands whose pull falls linearly to zero over this further separation of the
+        lips, then it breaks (:func:`visemeface.physics.film._cohesive_damage`). Its fracture
+        energy G_c = ½ σ_p (δ_p + strand) grows with the glue (σ_p, the pull at Z) and is
+        zero without glue, so glue 0 stays the elastic lips.
+    rupture_time : float
+        0 (default): the cohesive damage follows the separation at once. > 0 (s): it
+        relaxes toward the law's value with this time constant, dD/dt = (D_law − D)/τ
+        (a saliva strand thins and snaps over its capillary break-up time, not at once);
+        with ``strand`` 0 the film then lets go over τ after its breaking point.
     """
 
     initial_moisture: float = INITIAL_MOISTURE
@@ -132,6 +144,8 @@ class SalivaParams:
     soften: float = 0.0
     viscosity: float = float("inf")
     film_thickness: float = FILM_THICKNESS
+    strand: float = 0.0
+    rupture_time: float = 0.0
 
     @property
     def fluidity(self) -> float:
@@ -149,6 +163,10 @@ class SalivaParams:
             raise InputError(f"softening stretch must be >= 0, got {self.soften}")
         if not (self.viscosity > 0):
             raise InputError(f"saliva viscosity must be > 0 Pa·s, got {self.viscosity}")
+        if not (np.isfinite(self.strand) and self.strand >= 0):
+            raise InputError(f"saliva strand length must be >= 0 m, got {self.strand}")
+        if not (np.isfinite(self.rupture_time) and self.rupture_time >= 0):
+            raise InputError(f"saliva rupture time must be >= 0 s, got {self.rupture_time}")
         if not (np.isfinite(self.film_thickness) and self.film_thickness > 0):
             raise InputError(f"saliva film thickness must be > 0 m, got {self.film_thickness}")
         if not 0.0 <= self.decay < 1.0:
