@@ -67,6 +67,13 @@ EVAPORATION_RATE = 0.0
 FORCE_DECAY = 0.99
 #: The real saliva film's thickness between the lips, 0.07-0.1 mm (seed 000 §3.4.2, citing [CD87]).
 FILM_THICKNESS = 1e-4
+#: A rupture time (s) for the saliva drawn between parting lips (:attr:`SalivaParams.rupture_time`,
+#: not the default): a strand of saliva does not snap, it thins by capillarity against its
+#: viscoelasticity and breaks after a few extensional relaxation times, of order 10-100 ms for
+#: human saliva (filament break-up). 30 ms is a value inside that range chosen (issue 16) so that
+#: the glue-0.08 zipper of the seed scenario takes about 0.3 s on the 1500-vertex face; the
+#: zipper's length scales with it (10 ms: about 0.13 s; 0: the seed's release, one frame).
+RUPTURE_TIME = 0.03
 
 #: Hex8 natural-coordinate signs of the nodes, order (−,−,−) (+,−,−) (+,+,−) (−,+,−), then z+.
 HEX_SIGNS = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
@@ -129,10 +136,12 @@ class SalivaParams:
         energy G_c = ½ σ_p (δ_p + strand) grows with the glue (σ_p, the pull at Z) and is
         zero without glue, so glue 0 stays the elastic lips.
     rupture_time : float
-        0 (default): the cohesive damage follows the separation at once. > 0 (s): it
-        relaxes toward the law's value with this time constant, dD/dt = (D_law − D)/τ
-        (a saliva strand thins and snaps over its capillary break-up time, not at once);
-        with ``strand`` 0 the film then lets go over τ after its breaking point.
+        τ (s, e.g. :data:`RUPTURE_TIME`). > 0: the cohesive damage relaxes toward the
+        law's value, dD/dt = (D_law − D)/τ, and the film never pulls harder than at its
+        breaking point (a saliva strand thins and snaps over its break-up time, not at
+        once); with ``strand`` 0 the film lets go over τ after its breaking point, its pull
+        following the lips (the seed's ``decay`` is then unused). 0 with ``strand`` 0: the
+        seed's brittle film (its pull frozen at the break and decayed by ``decay`` a step).
     """
 
     initial_moisture: float = INITIAL_MOISTURE

@@ -42,7 +42,10 @@ class PhysicsSettings:
     it; ``glue_file`` a CSV (:func:`visemeface.physics.glue.read_glue_file`).
     ``posture_hz`` (0 = off) adds the stabiliser m (2π f)² (U(t) − u) on every
     free node alike; ``off`` names force terms to switch off (:data:`TERMS`).
-    ``film_elements``: least saliva slabs across the mouth. ``lip_bone``: the lips'
+    ``film_elements``: least saliva slabs across the mouth; ``film_corners``: the film runs on
+    into the mouth corners, where the lips meet (:attr:`FEMFace.corner_hexes`; off, the default,
+    it ends at the last seam pair and that free end, a notch tip, carries 1.2-1.3x the centre's
+    stretch and lets go first; on, the centre carries the most and the ends the least). ``lip_bone``: the lips'
     deep (bone-side) layer, their orbicularis, is moved along the muscle field like
     the jaw's bone (``muscle``, default) or ``free``. Free, the upper lip follows the
     glued lower one down at the centre and the seam tears at the corners first
