@@ -237,10 +237,26 @@ def _cohesive_damage(x, Z, d_old, thick, strand, modulus, lc):  # pragma: no cov
     return min(max(d, d_old), 1.0)
 
 
+@njit(inline="always", cache=True)
+def _damage_step(Q, x, Z, d_old, thick, strand, rupture, dt, modulus, lc):  # pragma: no cover - compiled
+    """A cohesive slab's damage after this step: 0 back in contact (Q ≤ 1: the film is whole
+    again); else the law's value (:func:`_cohesive_damage`), reached over the ``rupture`` time
+    (a strand thins before it snaps) but never pulling harder than at the breaking point."""
+    if Q <= 1.0:
+        return 0.0
+    d = _cohesive_damage(x, Z, d_old, thick, strand, modulus, lc)
+    if rupture > 0.0:
+        d = d_old + (1.0 - np.exp(-dt / rupture)) * (d - d_old)
+        sp = _film_stress(np.sqrt(Z), modulus, lc)
+        se = _film_stress(x, modulus, lc)
+        if se > sp:
+            d = max(d, 1.0 - sp / se)
+    return d
+
+
 @njit(cache=True)
-def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, stored, stretch, decay, rebond,
-               squeeze, modulus, lc, soften, flow, thick, band, h0, fluidity, dt, damage,
-               strand, rupture):  # pragma: no cover - compiled
+def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, stored, stretch, decay, rebond, squeeze,
+               modulus, lc, soften, flow, thick, band, h0, fluidity, dt, damage, strand, rupture):  # pragma: no cover
     """One step of every slab: the film's force law and breaking rule; R -= its nodal forces.
 
     Per slab (nodes interpolated from the tissue, see the module docstring):
@@ -249,10 +265,8 @@ def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, st
     (:func:`visemeface.physics.saliva.film_forces`); then the rule of
     :mod:`visemeface.physics.saliva`: squeezed out below ``squeeze`` (no force
     until back at Q ≥ 1), re-bond on contact (Q ≤ 1, strain ≤ ``rebond``),
-    break at Q ≥ Z keeping this step's pull, then decay it by ``decay`` a step;
-    or, with a ``strand`` length or a ``rupture`` time > 0, the cohesive law of
-    :func:`_cohesive_damage`: past Z the pull is scaled by 1 − D, D relaxing toward the
-    law's value over the rupture time, and the slab breaks at D = 1 (:data:`SNAPPED`).
+    break at Q ≥ Z keeping this step's pull, then decay it by ``decay`` a step; or, with a
+    ``strand`` or ``rupture`` > 0, past Z the pull × (1 − D) (:func:`_damage_step`), broken at D = 1.
     """
     uv = np.empty((8, 3))
     pull = np.empty((8, 3))
@@ -301,9 +315,7 @@ def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, st
             dry[k] = True
             broken[k] = True
             damage[k] = 0.0
-            for a in range(8):
-                for i in range(3):
-                    stored[k, a, i] = 0.0
+            stored[k] = 0.0
             continue
         if broken[k] and Q <= 1.0:
             strain = 0.0
@@ -326,25 +338,11 @@ def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, st
                         stored[k, a, i] *= decay
                     pull[a, i] = stored[k, a, i] * fac   # the decaying pull, and contact
         elif (strand > 0.0 or rupture > 0.0) and Q < 1e300 and (Qe >= Z[k] or damage[k] > 0.0):
-            if Q <= 1.0:
-                damage[k] = 0.0                    # lips back in contact: the film is whole again
-            else:
-                d = _cohesive_damage(x, Z[k], damage[k], thick[k], strand, modulus, lc)
-                if rupture > 0.0:                  # a strand thins over its rupture time ...
-                    d = damage[k] + (1.0 - np.exp(-dt / rupture)) * (d - damage[k])
-                    sp = _film_stress(np.sqrt(Z[k]), modulus, lc)
-                    se = _film_stress(x, modulus, lc)
-                    if se > sp:                    # ... but never pulls harder than at its peak
-                        d = max(d, 1.0 - sp / se)
-                damage[k] = d
+            damage[k] = _damage_step(Q, x, Z[k], damage[k], thick[k], strand, rupture, dt, modulus, lc)
             if damage[k] >= SNAPPED:
                 broken[k] = True                   # the strand has snapped: no pull from the next step
-                for a in range(8):
-                    for i in range(3):
-                        stored[k, a, i] = 0.0
-            for a in range(8):
-                for i in range(3):
-                    pull[a, i] *= 1.0 - damage[k]
+                stored[k] = 0.0
+            pull *= 1.0 - damage[k]
         elif Qe >= Z[k] or Q >= 1e300:
             broken[k] = True                       # keep this step's pull, decay from the next
             for a in range(8):
