@@ -18,8 +18,13 @@ The per-slab rule (stretch, breaking, decay, contact, re-bond, squeeze) is
 :func:`_film_step`, written once and compiled; its plain-numpy reference is in
 ``tests/physics/film_reference.py``. The film's state (``broken``, ``dry``,
 ``stored``, ``stretch``, ``flow``: the stretch taken up by the saliva's viscous
-flow, :attr:`~visemeface.physics.saliva.SalivaParams.viscosity`) lives in the simulation's
+flow, :attr:`~visemeface.physics.saliva.SalivaParams.viscosity`; ``damage``: the cohesive
+law's D, :attr:`~visemeface.physics.saliva.SalivaParams.rupture_time`) lives in the simulation's
 :class:`~visemeface.physics.state.SimState`, not here.
+
+The film may run on into the mouth corners (wedges from the last seam pair to the corner
+node both lips share, :attr:`~visemeface.physics.face_model.FEMFace.corner_hexes`): then it
+has no free end, whose notch tip otherwise carries 1.2-1.3x the centre's stretch.
 """
 
 from __future__ import annotations

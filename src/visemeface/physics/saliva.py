@@ -45,6 +45,13 @@ Two choices the seed leaves open, made here and documented:
   mouth, not one face-mesh element at a time.
 * **Glue per element.** ``K_glue`` is an array over the slabs
   (:mod:`visemeface.physics.glue`).
+* **Cohesive release (optional, issue 16).** Instead of the seed's brittle break and
+  per-step decay, the pull past Z can follow a bilinear traction-separation law
+  (``strand``: a softening tail in metres) and reach it over a ``rupture_time``
+  (saliva strands thin before they snap), the damage D a state of each slab. The
+  brittle law releases a slab in ~1 ms and the opened lips lever the rest of the
+  seam open in one frame; with a rupture time the failure front runs from the most
+  stretched place over a time set by τ.
 
 The rule runs once, compiled (:func:`_film_step`); a plain-numpy reference
 lives in the tests (``tests/physics/film_reference.py``).

@@ -31,7 +31,7 @@ class SimState:
     step : int
     dt : float
     saliva : dict of arrays
-        ``broken``, ``dry``, ``stored`` (E, 8, 3), ``stretch``, ``flow`` per film slab.
+        ``broken``, ``dry``, ``stored`` (E, 8, 3), ``stretch``, ``flow``, ``damage`` per film slab.
     """
 
     u: np.ndarray
