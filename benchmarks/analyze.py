@@ -108,7 +108,7 @@ def main() -> None:
         for label, box in (("given box", given), ("automatic box", None)):
             fps, frames = bench_source(clip, box)
             print(json.dumps({"bench": "analyze.grid", "case": clip.stem, "settings": f"lips, {label}",
-                              "frames": frames, "mouth_width_px": given.w, "frames_per_s": round(fps, 1),
+                              "frames": frames, "mouth_width_px": given.mouth_width, "frames_per_s": round(fps, 1),
                               "target_frames_per_s": 200, **common}), flush=True)
 
 

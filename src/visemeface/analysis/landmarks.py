@@ -35,7 +35,10 @@ All coordinates are frame pixels with pixel centres at integers (OpenCV's).
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
+import os
+import sys
 import tomllib
 from dataclasses import dataclass
 from functools import lru_cache
@@ -95,7 +98,7 @@ def decode(raw: np.ndarray, logits: np.ndarray, anchors: np.ndarray, size: int, 
     r = raw.reshape(len(anchors), -1)[keep] / size
     a = anchors[keep]
     c, half = a + r[:, 0:2], r[:, 2:4] / 2
-    kps = a[:, None, :] + r[:, 4:].reshape(len(r), -1, 2)
+    kps = a[:, None, :] + r[:, 4:].reshape(len(r), (r.shape[1] - 4) // 2, 2)
     return scores[keep], np.concatenate([c - half, c + half], axis=1), kps
 
 
@@ -149,6 +152,20 @@ def region_around(points: np.ndarray, eyes: tuple[int, int], scale: float) -> Re
     return Region(float(centre[0]), float(centre[1]), float(scale * max(hi - lo)), float(np.arctan2(yl - yr, xl - xr)))
 
 
+@contextlib.contextmanager
+def _quiet_stderr():
+    """Silence the interpreter's native log line ("INFO: Created TensorFlow Lite XNNPACK delegate")."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
 class FaceModels:
     """The two interpreters (one thread each) and the detector's anchors; make once, reuse."""
 
@@ -159,17 +176,21 @@ class FaceModels:
 
         cfg = settings()
         self.det_cfg, self.lm_cfg = cfg["detector"], cfg["landmarks"]
-        self._det = Interpreter(model_path=str(data_path("models", self.det_cfg["file"])), num_threads=threads)
-        self._lm = Interpreter(model_path=str(data_path("models", self.lm_cfg["file"])), num_threads=threads)
-        for it in (self._det, self._lm):
-            it.allocate_tensors()
+        with _quiet_stderr():
+            self._det = Interpreter(model_path=str(data_path("models", self.det_cfg["file"])), num_threads=threads)
+            self._lm = Interpreter(model_path=str(data_path("models", self.lm_cfg["file"])), num_threads=threads)
+            for it in (self._det, self._lm):
+                it.allocate_tensors()
         self.anchors = ssd_anchors(self.det_cfg["size"], self.det_cfg["strides"], self.det_cfg["anchors_per_layer"])
 
-    @staticmethod
-    def _run(it, x: np.ndarray) -> list[np.ndarray]:
-        it.set_tensor(it.get_input_details()[0]["index"], x[None])
+        self._io = {id(it): (it.get_input_details()[0]["index"], [d["index"] for d in it.get_output_details()])
+                    for it in (self._det, self._lm)}
+
+    def _run(self, it, x: np.ndarray) -> list[np.ndarray]:
+        inp, outs = self._io[id(it)]
+        it.set_tensor(inp, x[None])
         it.invoke()
-        return [it.get_tensor(d["index"]) for d in it.get_output_details()]
+        return [it.get_tensor(i) for i in outs]
 
     def detect(self, rgb: np.ndarray) -> list[Detection]:
         """Faces in an RGB uint8 frame, best first (empty when there is none)."""
@@ -198,7 +219,7 @@ class FaceModels:
         m = region.to_frame(n)
         crop = cv2.warpAffine(rgb, m, (n, n), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                               borderMode=cv2.BORDER_CONSTANT, borderValue=0)
-        outs = self._run(self._lm, crop.astype(np.float32) / 255.0)
+        outs = self._run(self._lm, crop.astype(np.float32) * np.float32(1 / 255))
         pts = next(o for o in outs if o.size > 1).reshape(-1, 3)[:, :2]
         presence = 1.0 / (1.0 + np.exp(-float(next(o for o in outs if o.size == 1).ravel()[0])))
         # model output u is continuous (0..n across the crop): pixel centre u - 0.5

@@ -69,6 +69,10 @@ from visemeface.errors import InputError
 #: the hand-read corners (docs/analysis.md).
 CORNER_MARGIN = 0.1
 
+#: Landmark box: the face mesh runs on every this-th frame, the frames between interpolated (speed:
+#: benchmarks/analyze.py, docs/analysis.md).
+LANDMARK_EVERY = 2
+
 #: Landmark box: lips count as closed (rest) when the inner-lip gap is at most this x the corner distance.
 CLOSED_GAP = 0.05
 
@@ -242,19 +246,25 @@ def natural_width(corners: np.ndarray, gap: np.ndarray) -> float:
     return float(np.median(dist[closed] if closed.sum() >= 3 else dist))
 
 
-def landmark_boxes(frames: Iterable[np.ndarray], source: str = "", tracker=None) -> list[MouthBox]:
-    """Per-frame boxes from tracked face-mesh landmarks (module notes); ``tracker`` a
+def landmark_boxes(frames: Iterable[np.ndarray], source: str = "", tracker=None,
+                   every: int = LANDMARK_EVERY) -> list[MouthBox]:
+    """Per-frame boxes from face-mesh landmarks tracked on every ``every``-th frame and the last
+    (the frames between interpolated; module notes); ``tracker`` a
     :class:`~visemeface.analysis.landmarks.FaceTracker` (default: a new one)."""
     from visemeface.analysis.landmarks import FaceTracker, settings
 
     tracker = tracker or FaceTracker()
     cfg = settings()["mouth"]
     keep = np.array(cfg["outer"] + cfg["corners"] + [cfg["upper_inner"], cfg["lower_inner"]])
-    found, size = [], None
-    for frame in frames:
+    found, size, last = [], None, None
+    for i, frame in enumerate(frames):
         size = frame.shape[1], frame.shape[0]
-        pts = tracker(frame)
+        pts = tracker(frame) if i % every == 0 else None
         found.append(None if pts is None else pts[keep])
+        last = frame
+    if found and found[-1] is None and (len(found) - 1) % every:
+        pts = tracker(last)
+        found[-1] = None if pts is None else pts[keep]
     ok = np.array([f is not None for f in found])
     if not ok.any():
         raise _no_face(len(found), source)
