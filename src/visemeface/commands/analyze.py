@@ -19,8 +19,10 @@ def register(subparsers) -> None:
         "area by the width squared), plus frame differences of area and width. The mouth box comes "
         "from --box, --box-json, or a sidecar <video>.json "
         '({"mouth_box": [x, y, w, h], "fps": 30, "size": [W, H]}; `visemeface face --camera-json` writes '
-        "one for the rendered face); without any, it is found automatically in every frame (face by skin "
-        "colour, lips by redness; the mouth width is the median over the clip). A margin around the box "
+        "one for the rendered face); without any, it is found automatically in every frame: from MediaPipe's "
+        "face mesh (shipped, offline) when the optional extra visemeface[track] is installed -- the box "
+        "covers the lips' corners frame by frame, the mouth width is the corner distance at rest -- else "
+        "by colour (face by skin, lips by redness; less exact at the corners of compressed video). A margin around the box "
         "(--pad) is analysed too, so a box drawn on the rest lips does not cut off a dropped jaw.",
         epilog="examples: visemeface analyze take1.mp4 --box 310,420,400,180 -o take1.csv --plot take1.png "
         "--overlay take1_overlay;  visemeface analyze swwp2s.mpg -o real.csv  (automatic mouth box)",
