@@ -247,13 +247,14 @@ def natural_width(corners: np.ndarray, gap: np.ndarray) -> float:
 
 
 def landmark_boxes(frames: Iterable[np.ndarray], source: str = "", tracker=None,
-                   every: int = LANDMARK_EVERY) -> list[MouthBox]:
-    """Per-frame boxes from face-mesh landmarks tracked on every ``every``-th frame and the last
-    (the frames between interpolated; module notes); ``tracker`` a
-    :class:`~visemeface.analysis.landmarks.FaceTracker` (default: a new one)."""
+                   every: int | None = None) -> list[MouthBox]:
+    """Per-frame boxes from face-mesh landmarks tracked on every ``every``-th frame (default
+    :data:`LANDMARK_EVERY`) and the last, the frames between interpolated (module notes);
+    ``tracker`` a :class:`~visemeface.analysis.landmarks.FaceTracker` (default: a new one)."""
     from visemeface.analysis.landmarks import FaceTracker, settings
 
     tracker = tracker or FaceTracker()
+    every = max(1, int(every or LANDMARK_EVERY))
     cfg = settings()["mouth"]
     keep = np.array(cfg["outer"] + cfg["corners"] + [cfg["upper_inner"], cfg["lower_inner"]])
     found, size, last = [], None, None
