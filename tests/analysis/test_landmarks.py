@@ -77,8 +77,8 @@ def test_blank_frame_has_no_face():
 @needs_model
 @pytest.mark.realdata
 def test_mesh_corners_near_hand_read_corners(realdata):
-    """Mesh points 61 and 291 against the hand-read corners of 12 GRID frames: median error <= 2 px,
-    none beyond 8 px (lbax4n's right corner runs on along the lip line ~7 px past the reading)."""
+    """Mesh points 61 and 291 against the hand-read corners of 30 GRID frames: median error <= 2 px,
+    none beyond 8 px (lbax4n's right corner runs on along the lip line up to 7 px past a reading)."""
     from visemeface.analysis.video import open_frames
 
     corners = pd.read_csv(CORNERS, comment="#")

@@ -65,7 +65,7 @@ from visemeface.errors import InputError
 
 
 #: Landmark box: margin beyond the outer lip outline, left and right, in natural mouth widths. Chosen
-#: on the three GRID clips of ../shared/realdata: the mesh corners lie up to 2.7 px (0.07 w) inside
+#: on the three GRID clips of ../shared/realdata: the mesh corners lie up to 3.3 px (0.08 w) inside
 #: the hand-read corners (docs/analysis.md).
 CORNER_MARGIN = 0.1
 
