@@ -123,3 +123,23 @@ def test_natural_width_from_closed_frames():
     corners = np.array([[[0, 0], [w, 0]] for w in (40, 40, 40, 50, 50)], float)
     assert natural_width(corners, np.array([0, 1, 1, 10, 12.0])) == 40     # open, spread frames left out
     assert natural_width(corners, np.full(5, 10.0)) == 40                 # none closed: the clip median
+
+
+def test_without_the_extra_the_box_comes_from_colour(monkeypatch):
+    """No interpreter installed: track_mouth falls back to the colour box (its own no-face error)."""
+    from visemeface.analysis import mouthbox
+
+    called = []
+    monkeypatch.setattr(landmarks, "available", lambda: False)
+    monkeypatch.setattr(mouthbox, "colour_boxes", lambda frames, source="": called.append(source) or [])
+    mouthbox.track_mouth([np.zeros((8, 8, 3), np.uint8)], source="clip")
+    assert called == ["clip"]
+
+
+def test_mouth_box_keeps_the_natural_width_apart():
+    from visemeface.analysis.openings import MouthBox
+
+    assert MouthBox(1, 2, 50, 20, natural_w=40).mouth_width == 40
+    assert MouthBox.of((1, 2, 50, 20)).mouth_width == 50
+    # the pad is in natural widths: 0.1 x 40 = 4 px left of x = 10
+    assert MouthBox(10, 10, 50, 20, natural_w=40).region((0.1, 0, 0, 0), 100, 100)[0] == 6

@@ -106,8 +106,11 @@ def iou(box: np.ndarray, boxes: np.ndarray) -> np.ndarray:
     """Intersection over union of one box ``(4,)`` with each of ``boxes`` ``(n, 4)`` (x0, y0, x1, y1)."""
     lo, hi = np.maximum(box[:2], boxes[:, :2]), np.minimum(box[2:], boxes[:, 2:])
     inter = np.prod(np.clip(hi - lo, 0, None), axis=1)
-    area = lambda b: np.prod(np.clip(b[..., 2:] - b[..., :2], 0, None), axis=-1)  # noqa: E731
-    return inter / np.maximum(area(box) + area(boxes) - inter, 1e-12)
+    return inter / np.maximum(_area(box) + _area(boxes) - inter, 1e-12)
+
+
+def _area(boxes: np.ndarray) -> np.ndarray:
+    return np.prod(np.clip(boxes[..., 2:] - boxes[..., :2], 0, None), axis=-1)
 
 
 def weighted_nms(scores, boxes, kps, min_iou: float) -> list[tuple[float, np.ndarray, np.ndarray]]:
@@ -203,8 +206,9 @@ class FaceModels:
         outs = {o.shape[-1]: o for o in self._run(self._det, x)}
         raw, logits = outs[max(outs)], outs[1]
         found = weighted_nms(*decode(raw, logits, self.anchors, n, cfg["min_score"]), cfg["min_suppression_iou"])
-        to_px = lambda p: p * side - np.array([px + 0.5, py + 0.5])  # noqa: E731
-        return [Detection(s, to_px(b.reshape(2, 2)).ravel(), to_px(k)) for s, b, k in found]
+        # normalised to the square (0..1 across it) -> frame pixel centres
+        off = np.array([px + 0.5, py + 0.5])
+        return [Detection(s, (b.reshape(2, 2) * side - off).ravel(), k * side - off) for s, b, k in found]
 
     def region_of(self, det: Detection) -> Region:
         """The landmark model's region around a detected face."""

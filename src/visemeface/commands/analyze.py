@@ -153,7 +153,13 @@ def run(args) -> int:
     n = len(df)
     multi = int((df["count"] >= 2).sum())
     jump = df["d_width"].abs()
-    width = f"mouth width {box.w} px" if boxes is None else f"automatic mouth box, mouth width {boxes[0].mouth_width} px"
+    if boxes is None:
+        width = f"mouth width {box.w} px"
+    else:
+        from visemeface.analysis.landmarks import available
+
+        how = "face landmarks" if available() else "by colour; pip install 'visemeface[track]' for landmarks"
+        width = f"automatic mouth box ({how}), mouth width {boxes[0].mouth_width} px"
     msg = (f"{n} frames at {source.fps:g} fps, {width}, method {args.method}: openings max {int(df['count'].max())}, "
            f"{multi} frame(s) with 2 or more; max width {df['width'].max():.3f} w, "
            f"max area {df['area'].max():.4f} w^2")
