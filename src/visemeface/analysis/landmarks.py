@@ -158,8 +158,12 @@ def region_around(points: np.ndarray, eyes: tuple[int, int], scale: float) -> Re
 @contextlib.contextmanager
 def _quiet_stderr():
     """Silence the interpreter's native log line ("INFO: Created TensorFlow Lite XNNPACK delegate")."""
-    sys.stderr.flush()
-    saved = os.dup(2)
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError, AttributeError):         # no file descriptor 2: nothing to silence
+        yield
+        return
     try:
         with open(os.devnull, "wb") as null:
             os.dup2(null.fileno(), 2)
