@@ -19,8 +19,10 @@ def register(subparsers) -> None:
         "area by the width squared), plus frame differences of area and width. The mouth box comes "
         "from --box, --box-json, or a sidecar <video>.json "
         '({"mouth_box": [x, y, w, h], "fps": 30, "size": [W, H]}; `visemeface face --camera-json` writes '
-        "one for the rendered face); without any, it is found automatically in every frame (face by skin "
-        "colour, lips by redness; the mouth width is the median over the clip). A margin around the box "
+        "one for the rendered face); without any, it is found automatically in every frame: from MediaPipe's "
+        "face mesh (shipped, offline) when the optional extra visemeface[track] is installed -- the box "
+        "covers the lips' corners frame by frame, the mouth width is the corner distance at rest -- else "
+        "by colour (face by skin, lips by redness; less exact at the corners of compressed video). A margin around the box "
         "(--pad) is analysed too, so a box drawn on the rest lips does not cut off a dropped jaw.",
         epilog="examples: visemeface analyze take1.mp4 --box 310,420,400,180 -o take1.csv --plot take1.png "
         "--overlay take1_overlay;  visemeface analyze swwp2s.mpg -o real.csv  (automatic mouth box)",
@@ -151,7 +153,13 @@ def run(args) -> int:
     n = len(df)
     multi = int((df["count"] >= 2).sum())
     jump = df["d_width"].abs()
-    width = f"mouth width {box.w} px" if boxes is None else f"automatic mouth box, width {boxes[0].w} px"
+    if boxes is None:
+        width = f"mouth width {box.w} px"
+    else:
+        from visemeface.analysis.landmarks import available
+
+        how = "face landmarks" if available() else "by colour; pip install 'visemeface[track]' for landmarks"
+        width = f"automatic mouth box ({how}), mouth width {boxes[0].mouth_width} px"
     msg = (f"{n} frames at {source.fps:g} fps, {width}, method {args.method}: openings max {int(df['count'].max())}, "
            f"{multi} frame(s) with 2 or more; max width {df['width'].max():.3f} w, "
            f"max area {df['area'].max():.4f} w^2")
