@@ -143,3 +143,20 @@ def test_mouth_box_keeps_the_natural_width_apart():
     assert MouthBox.of((1, 2, 50, 20)).mouth_width == 50
     # the pad is in natural widths: 0.1 x 40 = 4 px left of x = 10
     assert MouthBox(10, 10, 50, 20, natural_w=40).region((0.1, 0, 0, 0), 100, 100)[0] == 6
+
+
+@needs_model
+@pytest.mark.realdata
+def test_face_turned_in_the_frame_is_an_input_error(realdata):
+    """A real clip turned 90 degrees: the mesh still finds the face, but widths along the rows would be
+    the mouth's heights; a one-line InputError instead of a silently swapped profile (upright passes)."""
+    import cv2
+
+    from visemeface.analysis.mouthbox import landmark_boxes
+    from visemeface.analysis.video import open_frames
+
+    frames = list(open_frames(realdata / "swwp2s.mpg").frames())[:4]
+    assert len(landmark_boxes(frames, "clip")) == 4
+    turned = [np.ascontiguousarray(cv2.rotate(f, cv2.ROTATE_90_CLOCKWISE)) for f in frames]
+    with pytest.raises(InputError, match=r"clip: the face is turned \+9\d degrees"):
+        landmark_boxes(turned, "clip")

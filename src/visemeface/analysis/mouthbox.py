@@ -76,6 +76,12 @@ LANDMARK_EVERY = 2
 #: Landmark box: lips count as closed (rest) when the inner-lip gap is at most this x the corner distance.
 CLOSED_GAP = 0.05
 
+#: Landmark box: the analysis measures widths along the frame's rows and heights along its columns, so
+#: a face turned in the frame by more than this (degrees; the median angle of the line between the
+#: mouth corners) is an InputError rather than silently swapped metrics. Chosen, not tuned: at 30
+#: degrees a width reads cos 30 = 0.87 of itself; the GRID clips of ../shared/realdata roll 1-4 degrees.
+MAX_ROLL_DEG = 30.0
+
 #: Box width / width of the segmented lips. Tuned on the three GRID clips of ../shared/realdata:
 #: the lips' colour fades out 1-3 px before the hand-read corners of a 35-40 px mouth.
 WIDEN = 1.12
@@ -246,6 +252,17 @@ def natural_width(corners: np.ndarray, gap: np.ndarray) -> float:
     return float(np.median(dist[closed] if closed.sum() >= 3 else dist))
 
 
+def _check_upright(corners: np.ndarray, source: str) -> None:
+    """InputError when the mouth-corner line ``corners`` ``(n, 2, 2)`` turns more than MAX_ROLL_DEG."""
+    d = corners[:, 1] - corners[:, 0]
+    roll = float(np.degrees(np.arctan2(np.median(d[:, 1]), np.median(d[:, 0]))))
+    if abs(roll) > MAX_ROLL_DEG:
+        where = f"{source}: " if source else ""
+        raise InputError(f"{where}the face is turned {roll:+.0f} degrees in the frame (more than "
+                         f"{MAX_ROLL_DEG:.0f}); the analysis needs an upright face: rotate the video first "
+                         f"(e.g. ffmpeg -vf transpose=1 or 2)")
+
+
 def landmark_boxes(frames: Iterable[np.ndarray], source: str = "", tracker=None,
                    every: int | None = None) -> list[MouthBox]:
     """Per-frame boxes from face-mesh landmarks tracked on every ``every``-th frame (default
@@ -272,6 +289,7 @@ def landmark_boxes(frames: Iterable[np.ndarray], source: str = "", tracker=None,
     pts = _fill_gaps(np.array([f if f is not None else np.full((len(keep), 2), np.nan) for f in found]), ok)
     n_out = len(cfg["outer"])
     outer, corners, inner = pts[:, :n_out], pts[:, n_out:n_out + 2], pts[:, n_out + 2:]
+    _check_upright(corners, source)
     w0 = natural_width(corners, np.linalg.norm(inner[:, 1] - inner[:, 0], axis=1))
     lo = np.minimum(outer.min(axis=1), corners.min(axis=1))
     hi = np.maximum(outer.max(axis=1), corners.max(axis=1))
