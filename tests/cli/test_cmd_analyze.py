@@ -183,3 +183,24 @@ def test_analyze_real_clip_with_automatic_box(tmp_path, capsys, realdata):
     seed = tmp_path / "seed.csv"
     assert _run(capsys, "analyze", realdata / "swwp2s.mpg", "-o", seed, "--method", "seed")[0] == 0
     assert (pd.read_csv(seed)["count"] > 0).sum() < (df["count"] > 0).sum()
+
+
+def test_overlay_of_a_small_mouth_is_enlarged_with_its_label_inside(tmp_path, capsys, frames):
+    """A 50 px mouth (GRID's are 40 px): the overlay is enlarged to >= OVERLAY_MIN_BOX px across the box
+    and the white label above the box ends inside the image (it used to run off a 65 px crop)."""
+    from visemeface.commands.analyze import OVERLAY_MIN_BOX
+
+    d = tmp_path / "small"
+    d.mkdir()
+    for i, f in enumerate(frames[:3]):
+        cv2.imwrite(str(d / f"f{i}.png"), cv2.cvtColor(cv2.resize(f, (64, 64), interpolation=cv2.INTER_AREA),
+                                                       cv2.COLOR_RGB2BGR))
+    ov = tmp_path / "ov"
+    code, out, err = _run(capsys, "analyze", d, "--box", "7,19,50,25", "-o", tmp_path / "s.csv", "--overlay", ov)
+    assert code == 0, err
+    img = cv2.imread(str(sorted(ov.iterdir())[0]))
+    assert img.shape[1] >= OVERLAY_MIN_BOX
+    white_cols = np.flatnonzero((img[:12] == 255).all(axis=2).any(axis=0))
+    assert white_cols.size > 20 and white_cols.max() < img.shape[1] - 1
+    green = (img[..., 1] > 200) & (img[..., 0] < 80) & (img[..., 2] < 80)     # the outline, drawn enlarged
+    assert green.sum() > 50

@@ -4,6 +4,34 @@ from __future__ import annotations
 
 ORDER = 80
 
+#: Overlay frames of a small mouth are enlarged (nearest neighbour, whole pixels) to at least this many
+#: pixels across the mouth box, so the outlines and the label above the box are legible and the label
+#: fits inside the crop (a 40 px GRID mouth is otherwise a 60 px image with its label cut off).
+OVERLAY_MIN_BOX = 200
+
+
+def overlay_image(frame, openings, margin, label: str):
+    """The mouth box with ``margin`` (seed 001 Figs. 7-15) cut from an RGB ``frame``, enlarged to
+    :data:`OVERLAY_MIN_BOX`, with the box, the opening outlines and ``label`` drawn on it."""
+    import dataclasses
+    import math
+
+    import cv2
+    import numpy as np
+
+    from visemeface.analysis.openings import MouthBox, draw_openings
+
+    box = openings.box
+    x0, y0, x1, y1 = box.region(margin, frame.shape[1], frame.shape[0])
+    k = max(1, math.ceil(OVERLAY_MIN_BOX / box.w))
+    crop = cv2.resize(np.ascontiguousarray(frame[y0:y1, x0:x1]), None, fx=k, fy=k,
+                      interpolation=cv2.INTER_NEAREST)
+    # frame pixel p -> centre of its k x k block in the crop
+    moved = tuple(((c - np.array([x0, y0], np.int32)) * k + (k - 1) // 2).astype(np.int32)
+                  for c in openings.contours)
+    big = MouthBox((box.x - x0) * k, (box.y - y0) * k, box.w * k, box.h * k)
+    return draw_openings(crop, dataclasses.replace(openings, contours=moved, box=big), big, label)
+
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
@@ -87,7 +115,7 @@ def run(args) -> int:
 
     import cv2
 
-    from visemeface.analysis.openings import OpeningDetector, draw_openings
+    from visemeface.analysis.openings import OpeningDetector
     from visemeface.analysis.profiles import analyze_source, plot_profiles, write_profile
     from visemeface.analysis.video import open_frames, parse_box, read_sidecar, sidecar_path
     from visemeface.errors import InputError
@@ -138,9 +166,7 @@ def run(args) -> int:
             margin = [max(p, 0.15) for p in detector.pad]
 
             def on_frame(i, frame, openings):
-                # The overlay shows the mouth box with a margin, like seed 001 Figs. 7-15.
-                x0, y0, x1, y1 = openings.box.region(margin, *source.size)
-                img = draw_openings(frame, openings, openings.box, f"frame {i}")[y0:y1, x0:x1]
+                img = overlay_image(frame, openings, margin, f"frame {i}")
                 if not cv2.imwrite(str(overlay_dir / frame_name(i)), cv2.cvtColor(img, cv2.COLOR_RGB2BGR)):
                     raise InputError("cannot write overlay frame", overlay_dir)
 
