@@ -198,9 +198,22 @@ def test_overlay_of_a_small_mouth_is_enlarged_with_its_label_inside(tmp_path, ca
     ov = tmp_path / "ov"
     code, out, err = _run(capsys, "analyze", d, "--box", "7,19,50,25", "-o", tmp_path / "s.csv", "--overlay", ov)
     assert code == 0, err
+    assert "warning" not in err
     img = cv2.imread(str(sorted(ov.iterdir())[0]))
     assert img.shape[1] >= OVERLAY_MIN_BOX
     white_cols = np.flatnonzero((img[:12] == 255).all(axis=2).any(axis=0))
     assert white_cols.size > 20 and white_cols.max() < img.shape[1] - 1
     green = (img[..., 1] > 200) & (img[..., 0] < 80) & (img[..., 2] < 80)     # the outline, drawn enlarged
     assert green.sum() > 50
+
+
+def test_a_tiny_mouth_is_measured_with_a_warning(tmp_path, capsys, frames):
+    """A 12 px mouth: openings are likely missed (a GRID clip at 12 px finds none); say so on stderr."""
+    d = tmp_path / "tiny"
+    d.mkdir()
+    for i, f in enumerate(frames[:2]):
+        cv2.imwrite(str(d / f"f{i}.png"), cv2.cvtColor(cv2.resize(f, (16, 16), interpolation=cv2.INTER_AREA),
+                                                       cv2.COLOR_RGB2BGR))
+    code, out, err = _run(capsys, "analyze", d, "--box", "2,5,12,6", "-o", tmp_path / "t.csv")
+    assert code == 0 and (tmp_path / "t.csv").exists()
+    assert err.count("\n") == 1 and "warning: the mouth is only 12 px wide" in err
