@@ -217,3 +217,20 @@ def test_a_tiny_mouth_is_measured_with_a_warning(tmp_path, capsys, frames):
     code, out, err = _run(capsys, "analyze", d, "--box", "2,5,12,6", "-o", tmp_path / "t.csv")
     assert code == 0 and (tmp_path / "t.csv").exists()
     assert err.count("\n") == 1 and "warning: the mouth is only 12 px wide" in err
+
+
+def test_frames_without_a_face_are_named_in_a_warning(tmp_path, capsys, monkeypatch):
+    """An automatic box held over frames where no face was found: the CSV is written, one stderr line
+    says which frames (their openings read 0, not a closed mouth)."""
+    from visemeface.analysis import mouthbox
+    from visemeface.analysis.openings import MouthBox
+
+    d = tmp_path / "f"
+    d.mkdir()
+    for i in range(8):
+        cv2.imwrite(str(d / f"f{i}.png"), np.full((64, 64, 3), 128, np.uint8))
+    monkeypatch.setattr(mouthbox, "track_mouth", lambda frames, source="": [
+        MouthBox(10, 20, 40, 20, found=i not in (2, 3, 4, 7)) for i, _ in enumerate(frames)])
+    code, out, err = _run(capsys, "analyze", d, "-o", tmp_path / "p.csv")
+    assert code == 0 and len(pd.read_csv(tmp_path / "p.csv")) == 8
+    assert err.count("\n") == 1 and "no face in 4 of 8 frames (frames 2-4, 7)" in err

@@ -14,7 +14,8 @@ frame (:mod:`~visemeface.analysis.landmarks`), gives the mouth corners
   :data:`CORNER_MARGIN` :math:`w_0` to the left and right, so it covers both
   corners of a spread or rounded mouth and the model's few-pixel error.
 - Frames where the face is lost take their neighbours' points (linear
-  interpolation); a clip where no frame shows a face is an
+  interpolation; ``MouthBox.found`` False where no tracked frame on either side
+  had a face: ``analyze`` names them in a warning); a clip where no frame shows a face is an
   :class:`~visemeface.errors.InputError`.
 
 **Colour** (the fallback without the extra; :func:`colour_boxes`): the face by
@@ -299,7 +300,13 @@ def landmark_boxes(frames: Iterable[np.ndarray], source: str = "", tracker=None,
     y0 = np.clip(np.floor(lo[:, 1]), 0, size[1] - 4).astype(int)
     y1 = np.clip(np.ceil(hi[:, 1]), y0 + 3, size[1] - 1).astype(int)
     nat = max(4, int(round(w0)))
-    return [MouthBox(int(a), int(b), int(c - a + 1), int(d - b + 1), nat) for a, b, c, d in zip(x0, y0, x1, y1)]
+    tried = np.arange(len(found)) % every == 0
+    tried[-1] = True                        # the last frame is always tracked (see above)
+    # a frame has no face when the tried frames on both sides of it (those that exist) had none
+    idx = np.flatnonzero(tried)
+    lost = np.interp(np.arange(len(found)), idx, (~ok[idx]).astype(float)) == 1.0
+    return [MouthBox(int(a), int(b), int(c - a + 1), int(d - b + 1), nat, not bool(g))
+            for a, b, c, d, g in zip(x0, y0, x1, y1, lost)]
 
 
 def colour_boxes(frames: Iterable[np.ndarray], smooth: int = 5, min_face: float = 0.02,
@@ -337,10 +344,10 @@ def colour_boxes(frames: Iterable[np.ndarray], smooth: int = 5, min_face: float 
     bottom = _median_filter(ext[:, 3], smooth)
     w = max(4, int(round(width)))
     boxes = []
-    for x, y0, y1 in zip(cx, top, bottom):
+    for x, y0, y1, has in zip(cx, top, bottom, ok):
         # From a little above the red region (the pale upper vermilion) to its bottom.
         h = max(4, int(round(y1 - y0 + 0.15 * w)))
         bx = int(np.clip(round(x - w / 2), 0, size[0] - w))
         by = int(np.clip(round(y0 - 0.15 * w), 0, size[1] - h))
-        boxes.append(MouthBox(bx, by, w, h))
+        boxes.append(MouthBox(bx, by, w, h, found=bool(has)))
     return boxes

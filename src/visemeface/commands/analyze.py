@@ -15,6 +15,16 @@ OVERLAY_MIN_BOX = 200
 MIN_MOUTH_PX = 20
 
 
+def _ranges(frames: list[int]) -> str:
+    """``[3, 4, 5, 9]`` -> ``"frames 3-5, 9"`` (at most 5 runs, then "...")."""
+    runs, start = [], frames[0]
+    for a, b in zip(frames, frames[1:] + [None]):
+        if b != a + 1:
+            runs.append(f"{start}-{a}" if a > start else f"{start}")
+            start = b
+    return "frames " + ", ".join(runs[:5]) + (", ..." if len(runs) > 5 else "")
+
+
 def overlay_image(frame, openings, margin, label: str):
     """The mouth box with ``margin`` (seed 001 Figs. 7-15) cut from an RGB ``frame``, enlarged to
     :data:`OVERLAY_MIN_BOX`, with the box, the opening outlines and ``label`` drawn on it."""
@@ -193,6 +203,10 @@ def run(args) -> int:
         how = "face landmarks" if available() else "by colour; pip install 'visemeface[track]' for landmarks"
         width = f"automatic mouth box ({how}), mouth width {boxes[0].mouth_width} px"
     mouth_px = box.w if boxes is None else boxes[0].mouth_width
+    lost = [] if boxes is None else [i for i, b in enumerate(boxes) if not b.found]
+    if lost:
+        print(f"visemeface: warning: no face in {len(lost)} of {n} frames ({_ranges(lost)}): their box is "
+              "taken from the nearest frames with a face and their openings are likely 0", file=sys.stderr)
     if mouth_px < MIN_MOUTH_PX:
         print(f"visemeface: warning: the mouth is only {mouth_px} px wide (under {MIN_MOUTH_PX}): thin openings "
               "may be missed; use a larger video or crop", file=sys.stderr)
