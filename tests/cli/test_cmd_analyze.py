@@ -234,3 +234,17 @@ def test_frames_without_a_face_are_named_in_a_warning(tmp_path, capsys, monkeypa
     code, out, err = _run(capsys, "analyze", d, "-o", tmp_path / "p.csv")
     assert code == 0 and len(pd.read_csv(tmp_path / "p.csv")) == 8
     assert err.count("\n") == 1 and "no face in 4 of 8 frames (frames 2-4, 7)" in err
+
+
+def test_an_audio_only_file_says_it_has_no_video_stream(tmp_path, capsys):
+    """An .mp4 with only a sound track: a plain one-line reason, not ffmpeg's last log line."""
+    import subprocess
+
+    import imageio_ffmpeg
+
+    audio = tmp_path / "sound only.mp4"
+    subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-loglevel", "error", "-f", "lavfi", "-i", "sine=duration=0.2",
+                    str(audio)], check=True)
+    code, out, err = _run(capsys, "analyze", audio, "-o", tmp_path / "a.csv")
+    assert code == 2 and not (tmp_path / "a.csv").exists()
+    assert err.count("\n") == 1 and "no video stream found" in err
