@@ -65,7 +65,9 @@ def register(subparsers) -> None:
         "one for the rendered face); without any, it is found automatically in every frame: from MediaPipe's "
         "face mesh (shipped, offline) when the optional extra visemeface[track] is installed -- the box "
         "covers the lips' corners frame by frame, the mouth width is the corner distance at rest -- else "
-        "by colour (face by skin, lips by redness; less exact at the corners of compressed video). A margin around the box "
+        "by colour (face by skin, lips by redness; less exact at the corners of compressed video). Widths are "
+        "measured along the frame's rows: the face must be upright (the face mesh refuses one turned more than "
+        "30 degrees); frames where no face is found are named in a warning. A margin around the box "
         "(--pad) is analysed too, so a box drawn on the rest lips does not cut off a dropped jaw.",
         epilog="examples: visemeface analyze take1.mp4 --box 310,420,400,180 -o take1.csv --plot take1.png "
         "--overlay take1_overlay;  visemeface analyze swwp2s.mpg -o real.csv  (automatic mouth box)",
@@ -96,7 +98,7 @@ def register(subparsers) -> None:
     p.add_argument("--pad", default="0.1,0.1,0.1,0.4", metavar="F|L,T,R,B",
                    help="also analyse this margin around the box, in mouth widths (left,top,right,bottom; "
                    "default 0.1,0.1,0.1,0.4: room for the jaw to drop); 0 = exactly the box")
-    p.add_argument("--plot", metavar="PNG", help="also plot the profile over time")
+    p.add_argument("--plot", metavar="PNG", help="also plot the profile over time (.png, .pdf or .svg)")
     p.add_argument("--overlay", metavar="DIR", help="write every frame's mouth region with the detected outlines")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
     p.set_defaults(func=run)
