@@ -143,3 +143,48 @@ def test_mouth_box_keeps_the_natural_width_apart():
     assert MouthBox.of((1, 2, 50, 20)).mouth_width == 50
     # the pad is in natural widths: 0.1 x 40 = 4 px left of x = 10
     assert MouthBox(10, 10, 50, 20, natural_w=40).region((0.1, 0, 0, 0), 100, 100)[0] == 6
+
+
+@needs_model
+@pytest.mark.realdata
+def test_face_turned_in_the_frame_is_an_input_error(realdata):
+    """A real clip turned 90 degrees: the mesh still finds the face, but widths along the rows would be
+    the mouth's heights; a one-line InputError instead of a silently swapped profile (upright passes)."""
+    import cv2
+
+    from visemeface.analysis.mouthbox import landmark_boxes
+    from visemeface.analysis.video import open_frames
+
+    frames = list(open_frames(realdata / "swwp2s.mpg").frames())[:4]
+    assert len(landmark_boxes(frames, "clip")) == 4
+    turned = [np.ascontiguousarray(cv2.rotate(f, cv2.ROTATE_90_CLOCKWISE)) for f in frames]
+    with pytest.raises(InputError, match=r"clip: the face is turned \+9\d degrees"):
+        landmark_boxes(turned, "clip")
+
+
+@needs_model
+@pytest.mark.realdata
+def test_frames_without_a_face_are_marked_not_found(realdata):
+    """The face leaves after frame 4 (black frames): those boxes are held from frame 4 and flagged
+    ``found=False`` (analyze warns), the frames tracked or between two tracked faces are found."""
+    from visemeface.analysis.mouthbox import landmark_boxes
+    from visemeface.analysis.video import open_frames
+
+    frames = list(open_frames(realdata / "swwp2s.mpg").frames())[:10]
+    frames[5:] = [np.zeros_like(f) for f in frames[5:]]
+    boxes = landmark_boxes(frames, "clip", every=2)
+    # frame 5 lies between frame 4 (face) and 6 (none): counted found; 6-9 have no face near them
+    assert [b.found for b in boxes] == [True] * 6 + [False] * 4
+    assert boxes[9].w == boxes[4].w
+
+
+def test_colour_box_marks_frames_without_a_face(monkeypatch):
+    from visemeface.analysis import mouthbox
+
+    lips = (10.0, 30.0, 20.0, 26.0)
+    frames = [np.full((64, 64, 3), v, np.uint8) for v in (0, 1, 0)]      # frame 1: no lips, no face
+    monkeypatch.setattr(mouthbox, "find_face", lambda frame, min_face: (None, (0, 0, 8, 8)))
+    monkeypatch.setattr(mouthbox, "find_lips", lambda frame, min_face, face: None if frame[0, 0, 0] else lips)
+    monkeypatch.setattr(mouthbox, "lip_extent", lambda frame, red: None)
+    boxes = mouthbox.colour_boxes(frames, refine_every=99)
+    assert [b.found for b in boxes] == [True, False, True]

@@ -14,7 +14,8 @@ frame (:mod:`~visemeface.analysis.landmarks`), gives the mouth corners
   :data:`CORNER_MARGIN` :math:`w_0` to the left and right, so it covers both
   corners of a spread or rounded mouth and the model's few-pixel error.
 - Frames where the face is lost take their neighbours' points (linear
-  interpolation); a clip where no frame shows a face is an
+  interpolation; ``MouthBox.found`` False where no tracked frame on either side
+  had a face: ``analyze`` names them in a warning); a clip where no frame shows a face is an
   :class:`~visemeface.errors.InputError`.
 
 **Colour** (the fallback without the extra; :func:`colour_boxes`): the face by
@@ -75,6 +76,12 @@ LANDMARK_EVERY = 2
 
 #: Landmark box: lips count as closed (rest) when the inner-lip gap is at most this x the corner distance.
 CLOSED_GAP = 0.05
+
+#: Landmark box: the analysis measures widths along the frame's rows and heights along its columns, so
+#: a face turned in the frame by more than this (degrees; the median angle of the line between the
+#: mouth corners) is an InputError rather than silently swapped metrics. Chosen, not tuned: at 30
+#: degrees a width reads cos 30 = 0.87 of itself; the GRID clips of ../shared/realdata roll 1-4 degrees.
+MAX_ROLL_DEG = 30.0
 
 #: Box width / width of the segmented lips. Tuned on the three GRID clips of ../shared/realdata:
 #: the lips' colour fades out 1-3 px before the hand-read corners of a 35-40 px mouth.
@@ -246,6 +253,17 @@ def natural_width(corners: np.ndarray, gap: np.ndarray) -> float:
     return float(np.median(dist[closed] if closed.sum() >= 3 else dist))
 
 
+def _check_upright(corners: np.ndarray, source: str) -> None:
+    """InputError when the mouth-corner line ``corners`` ``(n, 2, 2)`` turns more than MAX_ROLL_DEG."""
+    d = corners[:, 1] - corners[:, 0]
+    roll = float(np.degrees(np.arctan2(np.median(d[:, 1]), np.median(d[:, 0]))))
+    if abs(roll) > MAX_ROLL_DEG:
+        where = f"{source}: " if source else ""
+        raise InputError(f"{where}the face is turned {roll:+.0f} degrees in the frame (more than "
+                         f"{MAX_ROLL_DEG:.0f}); the analysis needs an upright face: rotate the video first "
+                         f"(e.g. ffmpeg -vf transpose=1 or 2)")
+
+
 def landmark_boxes(frames: Iterable[np.ndarray], source: str = "", tracker=None,
                    every: int | None = None) -> list[MouthBox]:
     """Per-frame boxes from face-mesh landmarks tracked on every ``every``-th frame (default
@@ -272,6 +290,7 @@ def landmark_boxes(frames: Iterable[np.ndarray], source: str = "", tracker=None,
     pts = _fill_gaps(np.array([f if f is not None else np.full((len(keep), 2), np.nan) for f in found]), ok)
     n_out = len(cfg["outer"])
     outer, corners, inner = pts[:, :n_out], pts[:, n_out:n_out + 2], pts[:, n_out + 2:]
+    _check_upright(corners, source)
     w0 = natural_width(corners, np.linalg.norm(inner[:, 1] - inner[:, 0], axis=1))
     lo = np.minimum(outer.min(axis=1), corners.min(axis=1))
     hi = np.maximum(outer.max(axis=1), corners.max(axis=1))
@@ -281,7 +300,13 @@ def landmark_boxes(frames: Iterable[np.ndarray], source: str = "", tracker=None,
     y0 = np.clip(np.floor(lo[:, 1]), 0, size[1] - 4).astype(int)
     y1 = np.clip(np.ceil(hi[:, 1]), y0 + 3, size[1] - 1).astype(int)
     nat = max(4, int(round(w0)))
-    return [MouthBox(int(a), int(b), int(c - a + 1), int(d - b + 1), nat) for a, b, c, d in zip(x0, y0, x1, y1)]
+    tried = np.arange(len(found)) % every == 0
+    tried[-1] = True                        # the last frame is always tracked (see above)
+    # a frame has no face when the tried frames on both sides of it (those that exist) had none
+    idx = np.flatnonzero(tried)
+    lost = np.interp(np.arange(len(found)), idx, (~ok[idx]).astype(float)) == 1.0
+    return [MouthBox(int(a), int(b), int(c - a + 1), int(d - b + 1), nat, not bool(g))
+            for a, b, c, d, g in zip(x0, y0, x1, y1, lost)]
 
 
 def colour_boxes(frames: Iterable[np.ndarray], smooth: int = 5, min_face: float = 0.02,
@@ -319,10 +344,10 @@ def colour_boxes(frames: Iterable[np.ndarray], smooth: int = 5, min_face: float 
     bottom = _median_filter(ext[:, 3], smooth)
     w = max(4, int(round(width)))
     boxes = []
-    for x, y0, y1 in zip(cx, top, bottom):
+    for x, y0, y1, has in zip(cx, top, bottom, ok):
         # From a little above the red region (the pale upper vermilion) to its bottom.
         h = max(4, int(round(y1 - y0 + 0.15 * w)))
         bx = int(np.clip(round(x - w / 2), 0, size[0] - w))
         by = int(np.clip(round(y0 - 0.15 * w), 0, size[1] - h))
-        boxes.append(MouthBox(bx, by, w, h))
+        boxes.append(MouthBox(bx, by, w, h, found=bool(has)))
     return boxes

@@ -67,6 +67,8 @@ class MouthBox:
     normalises every metric, when the analysed box is not that wide: an
     automatic per-frame box follows the corners of a spread or rounded mouth
     while the scale stays the rest width (:mod:`~visemeface.analysis.mouthbox`).
+    ``found`` is False for an automatic box taken from neighbouring frames
+    because no face was found in and around this one.
     """
 
     x: int
@@ -74,6 +76,7 @@ class MouthBox:
     w: int
     h: int
     natural_w: int = 0
+    found: bool = True
 
     @property
     def mouth_width(self) -> int:
