@@ -8,7 +8,8 @@ Prints one JSON line per case:
   imageio-ffmpeg (ffmpeg start-up included), without writing outputs,
 - ``grid``: the real GRID clips of ../shared/realdata (360x288 MPEG-1, 75 frames,
   40-45 px mouths) through :func:`analyze_source`, decoding included, with a
-  given box and with the automatic box (face and lips found in every frame);
+  given box and with the automatic box (face-mesh landmarks with the ``track`` extra, every
+  ``--landmark-every`` frames, else colour);
   where the clips are absent, a synthetic 360x288 MPEG-1 clip with a given box.
   Target: >= 200 frames/s on 2 cores, both ways.
 
@@ -75,9 +76,17 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--frames", type=int, default=60, help="frames per synthetic case (default 60)")
     ap.add_argument("--realdata", type=Path, default=Path(__file__).resolve().parents[2] / "shared" / "realdata")
+    ap.add_argument("--landmark-every", type=int, default=None, metavar="K",
+                    help="automatic box: run the face mesh on every K-th frame (default "
+                    "visemeface.analysis.mouthbox.LANDMARK_EVERY)")
     ap.add_argument("--case", action="append", choices=[*CASES, "grid"],
                     help="run only these synthetic cases (repeatable; default all); the real clips always run")
     args = ap.parse_args()
+    from visemeface.analysis import landmarks, mouthbox
+
+    if args.landmark_every:
+        mouthbox.LANDMARK_EVERY = args.landmark_every
+    box_method = f"landmarks every {mouthbox.LANDMARK_EVERY}" if landmarks.available() else "colour"
     n = args.frames
     common = {"cv2_threads": cv2.getNumThreads(), "cpus": os.cpu_count()}
     for name, (size, box) in {**CASES, "grid": GRID}.items():
@@ -108,7 +117,8 @@ def main() -> None:
         for label, box in (("given box", given), ("automatic box", None)):
             fps, frames = bench_source(clip, box)
             print(json.dumps({"bench": "analyze.grid", "case": clip.stem, "settings": f"lips, {label}",
-                              "frames": frames, "mouth_width_px": given.w, "frames_per_s": round(fps, 1),
+                              "box": box_method if box is None else "given",
+                              "frames": frames, "mouth_width_px": given.mouth_width, "frames_per_s": round(fps, 1),
                               "target_frames_per_s": 200, **common}), flush=True)
 
 

@@ -179,3 +179,27 @@ def test_correlation_of_a_constant_profile_is_nan_and_lag_zero():
 
     c = correlation(_series_profile(np.zeros(20)), _series_profile(np.linspace(0, 1, 20)))
     assert np.isnan(c["r"]["height"]) and c["lag"] == 0 and np.isnan(c["r_lag"])
+
+
+@pytest.mark.parametrize("suffix,magic", [(".svg", b"<?xml"), (".pdf", b"%PDF")])
+def test_plot_format_follows_the_suffix_and_is_deterministic(tmp_path, merging, suffix, magic):
+    """--plot x.svg / x.pdf are accepted by analyze and compare: they must be SVG / PDF (they were PNG
+    bytes under that name), byte for byte the same on a rerun (no date, no random ids)."""
+    a, b = tmp_path / f"a{suffix}", tmp_path / f"b{suffix}"
+    plot_profiles({"merge": merging}, a)
+    plot_profiles({"merge": merging}, b)
+    assert a.read_bytes().startswith(magic)
+    assert a.read_bytes() == b.read_bytes()
+
+
+def test_plot_of_a_single_frame_shows_its_values(tmp_path, merging):
+    """A still image is a one-frame profile: a line through one point draws nothing, so it gets markers."""
+    import matplotlib.image as mpimg
+
+    def coloured(df, name):
+        plot_profiles({"one": df}, tmp_path / name, metrics=["area", "width", "height"])
+        rgb = mpimg.imread(tmp_path / name)[..., :3]
+        return int(((rgb.max(axis=2) - rgb.min(axis=2)) > 0.4).sum())
+
+    legend_only = coloured(merging.iloc[:1].assign(area=np.nan, width=np.nan, height=np.nan), "none.png")
+    assert coloured(merging.iloc[:1], "one.png") > legend_only + 3 * 20        # a marker in each panel

@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from visemeface.analysis import landmarks
 from visemeface.analysis.mouthbox import track_mouth
 from visemeface.analysis.openings import OpeningDetector
 from visemeface.analysis.video import open_frames
@@ -89,17 +90,48 @@ def test_mouth_crops_count_one_opening_when_open(realdata):
     np.testing.assert_array_equal(counts, lab["open"].to_numpy())
 
 
-def test_automatic_box_edges_near_the_mouth_corners(realdata):
-    """The automatic box's edges lie within 5 px (about 0.13 w) of the hand-read corners.
+def test_automatic_box_covers_both_mouth_corners(realdata):
+    """The issue's acceptance: on each real clip the automatic box covers both hand-read corners,
+    and its edges are not absurdly far from them (within a third of the natural mouth width)."""
+    if not landmarks.available():
+        pytest.skip("the automatic box from landmarks needs the optional extra visemeface[track]")
+    corners = pd.read_csv(LABELS.with_name("realdata_corners.csv"), comment="#")
+    for clip in CLIPS:
+        boxes = track_mouth(list(open_frames(realdata / f"{clip}.mpg").frames()), source=clip)
+        assert len({b.mouth_width for b in boxes}) == 1          # one normalising width for the clip
+        for r in corners[corners["clip"] == clip].itertuples():
+            b = boxes[r.frame]
+            inside = np.array([r.left_x - b.x, b.x + b.w - 1 - r.right_x])    # > 0: corner inside the box
+            assert (inside >= 1).all(), (clip, r.frame, b, inside)
+            assert (inside <= b.mouth_width / 3).all(), (clip, r.frame, b, inside)
 
-    Not yet the issue's "covers both corners on every frame": on bbaf2n the right corner (where the
-    lip line fades into a crease) lies up to 5 px beyond the box; the opening detector analyses the
-    box plus 0.1 w on each side.
+
+def test_automatic_box_covers_the_tracked_corners_on_every_frame(realdata):
+    """Every frame: the box covers the face-mesh corners of that frame (the box is per frame)."""
+    if not landmarks.available():
+        pytest.skip("the automatic box from landmarks needs the optional extra visemeface[track]")
+    mouth = landmarks.settings()["mouth"]
+    for clip in CLIPS:
+        frames = list(open_frames(realdata / f"{clip}.mpg").frames())
+        tracker = landmarks.FaceTracker()
+        pts = [tracker(f) for f in frames]
+        assert all(p is not None for p in pts), clip
+        boxes = track_mouth(frames, source=clip)
+        for p, b in zip(pts, boxes):
+            xs = p[mouth["corners"], 0]
+            assert b.x + 1 <= xs.min() and xs.max() <= b.x + b.w - 2, (clip, b, xs)
+
+
+def test_colour_box_edges_near_the_mouth_corners(realdata):
+    """The colour fallback (no landmark model): box edges within 5 px (about 0.13 w) of the corners.
+
+    It does not always cover them: on bbaf2n the right corner lies up to 5 px beyond the box (MPEG-1's
+    4:2:0 chroma loses the lip colour before the corner); the detector analyses box + 0.1 w each side.
     """
     corners = pd.read_csv(LABELS.with_name("realdata_corners.csv"), comment="#")
     off = []
     for clip in CLIPS:
-        boxes = track_mouth(list(open_frames(realdata / f"{clip}.mpg").frames()), source=clip)
+        boxes = track_mouth(list(open_frames(realdata / f"{clip}.mpg").frames()), source=clip, method="colour")
         for r in corners[corners["clip"] == clip].itertuples():
             b = boxes[r.frame]
             off += [b.x - r.left_x, b.x + b.w - 1 - r.right_x]

@@ -183,3 +183,68 @@ def test_analyze_real_clip_with_automatic_box(tmp_path, capsys, realdata):
     seed = tmp_path / "seed.csv"
     assert _run(capsys, "analyze", realdata / "swwp2s.mpg", "-o", seed, "--method", "seed")[0] == 0
     assert (pd.read_csv(seed)["count"] > 0).sum() < (df["count"] > 0).sum()
+
+
+def test_overlay_of_a_small_mouth_is_enlarged_with_its_label_inside(tmp_path, capsys, frames):
+    """A 50 px mouth (GRID's are 40 px): the overlay is enlarged to >= OVERLAY_MIN_BOX px across the box
+    and the white label above the box ends inside the image (it used to run off a 65 px crop)."""
+    from visemeface.commands.analyze import OVERLAY_MIN_BOX
+
+    d = tmp_path / "small"
+    d.mkdir()
+    for i, f in enumerate(frames[:3]):
+        cv2.imwrite(str(d / f"f{i}.png"), cv2.cvtColor(cv2.resize(f, (64, 64), interpolation=cv2.INTER_AREA),
+                                                       cv2.COLOR_RGB2BGR))
+    ov = tmp_path / "ov"
+    code, out, err = _run(capsys, "analyze", d, "--box", "7,19,50,25", "-o", tmp_path / "s.csv", "--overlay", ov)
+    assert code == 0, err
+    assert "warning" not in err
+    img = cv2.imread(str(sorted(ov.iterdir())[0]))
+    assert img.shape[1] >= OVERLAY_MIN_BOX
+    white_cols = np.flatnonzero((img[:12] == 255).all(axis=2).any(axis=0))
+    assert white_cols.size > 20 and white_cols.max() < img.shape[1] - 1
+    green = (img[..., 1] > 200) & (img[..., 0] < 80) & (img[..., 2] < 80)     # the outline, drawn enlarged
+    assert green.sum() > 50
+
+
+def test_a_tiny_mouth_is_measured_with_a_warning(tmp_path, capsys, frames):
+    """A 12 px mouth: openings are likely missed (a GRID clip at 12 px finds none); say so on stderr."""
+    d = tmp_path / "tiny"
+    d.mkdir()
+    for i, f in enumerate(frames[:2]):
+        cv2.imwrite(str(d / f"f{i}.png"), cv2.cvtColor(cv2.resize(f, (16, 16), interpolation=cv2.INTER_AREA),
+                                                       cv2.COLOR_RGB2BGR))
+    code, out, err = _run(capsys, "analyze", d, "--box", "2,5,12,6", "-o", tmp_path / "t.csv")
+    assert code == 0 and (tmp_path / "t.csv").exists()
+    assert err.count("\n") == 1 and "warning: the mouth is only 12 px wide" in err
+
+
+def test_frames_without_a_face_are_named_in_a_warning(tmp_path, capsys, monkeypatch):
+    """An automatic box held over frames where no face was found: the CSV is written, one stderr line
+    says which frames (their openings read 0, not a closed mouth)."""
+    from visemeface.analysis import mouthbox
+    from visemeface.analysis.openings import MouthBox
+
+    d = tmp_path / "f"
+    d.mkdir()
+    for i in range(8):
+        cv2.imwrite(str(d / f"f{i}.png"), np.full((64, 64, 3), 128, np.uint8))
+    monkeypatch.setattr(mouthbox, "track_mouth", lambda frames, source="": [
+        MouthBox(10, 20, 40, 20, found=i not in (2, 3, 4, 7)) for i, _ in enumerate(frames)])
+    code, out, err = _run(capsys, "analyze", d, "-o", tmp_path / "p.csv")
+    assert code == 0 and len(pd.read_csv(tmp_path / "p.csv")) == 8
+    assert err.count("\n") == 1 and "no face in 4 of 8 frames (frames 2-4, 7)" in err
+
+
+def test_an_audio_only_file_says_it_has_no_video_stream(tmp_path, capsys):
+    """An .mp4 with only a sound track: a plain one-line reason, not ffmpeg's last log line."""
+    import subprocess
+
+    import imageio_ffmpeg
+
+    audio = tmp_path / "sound only.mp4"
+    subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-loglevel", "error", "-f", "lavfi", "-i", "sine=duration=0.2",
+                    str(audio)], check=True)
+    code, out, err = _run(capsys, "analyze", audio, "-o", tmp_path / "a.csv")
+    assert code == 2 and not (tmp_path / "a.csv").exists()
+    assert err.count("\n") == 1 and "no video stream found" in err

@@ -8,7 +8,9 @@
   grey, median blur, dark threshold, top-level contours, optional convex hull
   and teeth handling).
 - :mod:`~visemeface.analysis.mouthbox`: the mouth box found automatically in
-  every frame of a real video (face by skin colour, lips by redness).
+  every frame of a real video: from face landmarks
+  (:mod:`~visemeface.analysis.landmarks`, MediaPipe's face detector and face
+  mesh, optional extra ``track``), else by colour (face by skin, lips by redness).
 - :mod:`~visemeface.analysis.profiles`: those metrics over time as a
   DataFrame with frame-difference derivatives, the L2 distance and the
   Pearson correlation (with the best time offset) between two profiles

@@ -1,8 +1,25 @@
-"""Automatic mouth box for real video without a sidecar: find the face by skin colour, the lips in it.
+"""Automatic mouth box for real video without a sidecar: from face landmarks, else from colour.
 
-No face-landmark model ships inside a pip wheel that runs offline with this
-project's dependencies (see ``docs/analysis.md``), so the box comes from
-colour, the same cue the lip segmentation uses:
+**Landmarks** (default when the optional extra ``visemeface[track]`` is
+installed; :func:`landmark_boxes`): MediaPipe's face mesh, tracked frame to
+frame (:mod:`~visemeface.analysis.landmarks`), gives the mouth corners
+(mesh points 61 and 291) and the outer lip outline in every frame.
+
+- The *natural mouth width* :math:`w_0` that normalises every metric is the
+  median corner distance over the frames with closed lips (inner-lip gap
+  13-14 at most :data:`CLOSED_GAP` x the corner distance; the clip median when
+  fewer than 3 frames are closed), the same for the whole clip
+  (``MouthBox.natural_w``).
+- The *analysed box* is per frame: the outer lip outline's extent, grown by
+  :data:`CORNER_MARGIN` :math:`w_0` to the left and right, so it covers both
+  corners of a spread or rounded mouth and the model's few-pixel error.
+- Frames where the face is lost take their neighbours' points (linear
+  interpolation; ``MouthBox.found`` False where no tracked frame on either side
+  had a face: ``analyze`` names them in a warning); a clip where no frame shows a face is an
+  :class:`~visemeface.errors.InputError`.
+
+**Colour** (the fallback without the extra; :func:`colour_boxes`): the face by
+skin colour, the lips in it by redness:
 
 1. *Face*: skin pixels in YCrCb, :math:`135 \\le C_r \\le 185`,
    :math:`70 \\le C_b \\le 135`, :math:`Y \\ge 40` (the classic skin cluster of
@@ -19,8 +36,8 @@ colour, the same cue the lip segmentation uses:
 3. *Tracking*: the face is found again every ``face_every`` frames (it moves
    little in 0.2 s) and at once when the lips are lost; the lips are searched
    in every frame (no drift), and the box centre
-   is median-filtered over ``smooth`` frames; the box width -- the *natural
-   mouth width* that normalises every metric -- is the median of the per-frame
+   is median-filtered over ``smooth`` frames; the box width -- here both the
+   natural mouth width and the analysed extent -- is the median of the per-frame
    widths over the whole clip, so a wide-open or rounded frame does not
    change the scale. Every ``refine_every``-th frame the lips are segmented
    around the red region as the opening detector does
@@ -30,6 +47,8 @@ colour, the same cue the lip segmentation uses:
    before the corners, so ``w`` is :data:`WIDEN` times their width. The box
    reaches from ``0.15 w`` above the red region (the paler upper vermilion) to
    its bottom; :class:`~visemeface.analysis.openings.OpeningDetector` pads it.
+   On MPEG-1 (4:2:0 chroma) the lip colour fades 3-6 px before a corner, so
+   this box can end inside the mouth (``docs/analysis.md``).
 
 A frame where no lips are found takes the neighbouring frames' box; a clip
 where no frame shows a face is an :class:`~visemeface.errors.InputError`.
@@ -45,6 +64,24 @@ import numpy as np
 from visemeface.analysis.openings import MouthBox
 from visemeface.errors import InputError
 
+
+#: Landmark box: margin beyond the outer lip outline, left and right, in natural mouth widths. Chosen
+#: on the three GRID clips of ../shared/realdata: the mesh corners lie up to 3.3 px (0.08 w) inside
+#: the hand-read corners (docs/analysis.md).
+CORNER_MARGIN = 0.1
+
+#: Landmark box: the face mesh runs on every this-th frame, the frames between interpolated (speed:
+#: benchmarks/analyze.py, docs/analysis.md).
+LANDMARK_EVERY = 2
+
+#: Landmark box: lips count as closed (rest) when the inner-lip gap is at most this x the corner distance.
+CLOSED_GAP = 0.05
+
+#: Landmark box: the analysis measures widths along the frame's rows and heights along its columns, so
+#: a face turned in the frame by more than this (degrees; the median angle of the line between the
+#: mouth corners) is an InputError rather than silently swapped metrics. Chosen, not tuned: at 30
+#: degrees a width reads cos 30 = 0.87 of itself; the GRID clips of ../shared/realdata roll 1-4 degrees.
+MAX_ROLL_DEG = 30.0
 
 #: Box width / width of the segmented lips. Tuned on the three GRID clips of ../shared/realdata:
 #: the lips' colour fades out 1-3 px before the hand-read corners of a 35-40 px mouth.
@@ -173,9 +210,109 @@ def lip_extent(frame: np.ndarray, red) -> tuple[float, float, float] | None:
     return (cols[0] + 0.5) / s - 0.5 + x0, (cols[-1] + 0.5) / s - 0.5 + x0, (x_l + x_r) / 2
 
 
-def track_mouth(frames: Iterable[np.ndarray], smooth: int = 5, min_face: float = 0.02,
-                source: str = "", face_every: int = 5, refine_every: int = 5) -> list[MouthBox]:
-    """One mouth box per frame (see the module notes); raises InputError if no frame shows a face."""
+def track_mouth(frames: Iterable[np.ndarray], source: str = "", method: str | None = None) -> list[MouthBox]:
+    """One mouth box per frame (see the module notes); raises InputError if no frame shows a face.
+
+    ``method`` is ``"landmarks"``, ``"colour"`` or None: landmarks when the
+    optional extra ``visemeface[track]`` is installed, else colour.
+    """
+    from visemeface.analysis import landmarks
+
+    if method is None:
+        method = "landmarks" if landmarks.available() else "colour"
+    if method == "landmarks":
+        return landmark_boxes(frames, source)
+    if method == "colour":
+        return colour_boxes(frames, source=source)
+    raise InputError(f"mouth box method must be 'landmarks' or 'colour', got {method!r}")
+
+
+def _no_face(n: int, source: str) -> InputError:
+    where = f" in {source}" if source else ""
+    if not n:
+        return InputError(f"no frames{where}")
+    return InputError(f"no face found{where}: give the mouth box with --box X,Y,W,H or --box-json FILE")
+
+
+def _fill_gaps(values: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """Rows of ``values`` (frames x ...) where ``ok`` is False, interpolated linearly from the others."""
+    flat = values.reshape(len(values), -1).astype(float)
+    idx = np.arange(len(values))
+    for j in range(flat.shape[1]):
+        flat[:, j] = np.interp(idx, idx[ok], flat[ok, j])
+    return flat.reshape(values.shape)
+
+
+def natural_width(corners: np.ndarray, gap: np.ndarray) -> float:
+    """Median corner distance over the closed-lip frames (gap <= CLOSED_GAP x it), else over all.
+
+    ``corners`` is ``(n, 2, 2)`` (frame, corner, xy), ``gap`` the inner-lip gap ``(n,)`` in pixels.
+    """
+    dist = np.linalg.norm(corners[:, 1] - corners[:, 0], axis=1)
+    closed = gap <= CLOSED_GAP * dist
+    return float(np.median(dist[closed] if closed.sum() >= 3 else dist))
+
+
+def _check_upright(corners: np.ndarray, source: str) -> None:
+    """InputError when the mouth-corner line ``corners`` ``(n, 2, 2)`` turns more than MAX_ROLL_DEG."""
+    d = corners[:, 1] - corners[:, 0]
+    roll = float(np.degrees(np.arctan2(np.median(d[:, 1]), np.median(d[:, 0]))))
+    if abs(roll) > MAX_ROLL_DEG:
+        where = f"{source}: " if source else ""
+        raise InputError(f"{where}the face is turned {roll:+.0f} degrees in the frame (more than "
+                         f"{MAX_ROLL_DEG:.0f}); the analysis needs an upright face: rotate the video first "
+                         f"(e.g. ffmpeg -vf transpose=1 or 2)")
+
+
+def landmark_boxes(frames: Iterable[np.ndarray], source: str = "", tracker=None,
+                   every: int | None = None) -> list[MouthBox]:
+    """Per-frame boxes from face-mesh landmarks tracked on every ``every``-th frame (default
+    :data:`LANDMARK_EVERY`) and the last, the frames between interpolated (module notes);
+    ``tracker`` a :class:`~visemeface.analysis.landmarks.FaceTracker` (default: a new one)."""
+    from visemeface.analysis.landmarks import FaceTracker, settings
+
+    tracker = tracker or FaceTracker()
+    every = max(1, int(every or LANDMARK_EVERY))
+    cfg = settings()["mouth"]
+    keep = np.array(cfg["outer"] + cfg["corners"] + [cfg["upper_inner"], cfg["lower_inner"]])
+    found, size, last = [], None, None
+    for i, frame in enumerate(frames):
+        size = frame.shape[1], frame.shape[0]
+        pts = tracker(frame) if i % every == 0 else None
+        found.append(None if pts is None else pts[keep])
+        last = frame
+    if found and found[-1] is None and (len(found) - 1) % every:
+        pts = tracker(last)
+        found[-1] = None if pts is None else pts[keep]
+    ok = np.array([f is not None for f in found])
+    if not ok.any():
+        raise _no_face(len(found), source)
+    pts = _fill_gaps(np.array([f if f is not None else np.full((len(keep), 2), np.nan) for f in found]), ok)
+    n_out = len(cfg["outer"])
+    outer, corners, inner = pts[:, :n_out], pts[:, n_out:n_out + 2], pts[:, n_out + 2:]
+    _check_upright(corners, source)
+    w0 = natural_width(corners, np.linalg.norm(inner[:, 1] - inner[:, 0], axis=1))
+    lo = np.minimum(outer.min(axis=1), corners.min(axis=1))
+    hi = np.maximum(outer.max(axis=1), corners.max(axis=1))
+    margin = CORNER_MARGIN * w0
+    x0 = np.clip(np.floor(lo[:, 0] - margin), 0, size[0] - 4).astype(int)
+    x1 = np.clip(np.ceil(hi[:, 0] + margin), x0 + 3, size[0] - 1).astype(int)
+    y0 = np.clip(np.floor(lo[:, 1]), 0, size[1] - 4).astype(int)
+    y1 = np.clip(np.ceil(hi[:, 1]), y0 + 3, size[1] - 1).astype(int)
+    nat = max(4, int(round(w0)))
+    tried = np.arange(len(found)) % every == 0
+    tried[-1] = True                        # the last frame is always tracked (see above)
+    # a frame has no face when the tried frames on both sides of it (those that exist) had none
+    idx = np.flatnonzero(tried)
+    lost = np.interp(np.arange(len(found)), idx, (~ok[idx]).astype(float)) == 1.0
+    return [MouthBox(int(a), int(b), int(c - a + 1), int(d - b + 1), nat, not bool(g))
+            for a, b, c, d, g in zip(x0, y0, x1, y1, lost)]
+
+
+def colour_boxes(frames: Iterable[np.ndarray], smooth: int = 5, min_face: float = 0.02,
+                 source: str = "", face_every: int = 5, refine_every: int = 5) -> list[MouthBox]:
+    """One mouth box per frame by skin and lip colour (module notes, the fallback); raises
+    InputError if no frame shows a face."""
     found, size, face, age, fine = [], None, None, 0, []
     for frame in frames:
         size = frame.shape[1], frame.shape[0]
@@ -189,16 +326,11 @@ def track_mouth(frames: Iterable[np.ndarray], smooth: int = 5, min_face: float =
         found.append(lips)
         if lips is not None and len(found) % refine_every == 1:
             fine.append(lip_extent(frame, lips))
-    where = f" in {source}" if source else ""
-    if not found:
-        raise InputError(f"no frames{where}")
-    ok = np.array([f is not None for f in found])
+    ok = np.array([f is not None for f in found], bool)
     if not ok.any():
-        raise InputError(f"no face found{where}: give the mouth box with --box X,Y,W,H or --box-json FILE")
-    ext = np.array([f if f is not None else (np.nan,) * 4 for f in found], float)
-    idx = np.arange(len(found))
-    for j in range(4):           # frames without lips: interpolate from their neighbours
-        ext[:, j] = np.interp(idx, idx[ok], ext[ok, j])
+        raise _no_face(len(found), source)
+    # frames without lips: interpolate from their neighbours
+    ext = _fill_gaps(np.array([f if f is not None else (np.nan,) * 4 for f in found], float), ok)
     cx = _median_filter((ext[:, 0] + ext[:, 1]) / 2, smooth)
     fine = np.array([f for f in fine if f is not None], float).reshape(-1, 3)
     if len(fine):
@@ -212,10 +344,10 @@ def track_mouth(frames: Iterable[np.ndarray], smooth: int = 5, min_face: float =
     bottom = _median_filter(ext[:, 3], smooth)
     w = max(4, int(round(width)))
     boxes = []
-    for x, y0, y1 in zip(cx, top, bottom):
+    for x, y0, y1, has in zip(cx, top, bottom, ok):
         # From a little above the red region (the pale upper vermilion) to its bottom.
         h = max(4, int(round(y1 - y0 + 0.15 * w)))
         bx = int(np.clip(round(x - w / 2), 0, size[0] - w))
         by = int(np.clip(round(y0 - 0.15 * w), 0, size[1] - h))
-        boxes.append(MouthBox(bx, by, w, h))
+        boxes.append(MouthBox(bx, by, w, h, found=bool(has)))
     return boxes

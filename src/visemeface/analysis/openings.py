@@ -61,12 +61,27 @@ METHODS = ("lips", "seed")
 
 @dataclass(frozen=True)
 class MouthBox:
-    """Pixel box ``(x, y, w, h)`` around the mouth; ``w`` spans corner to corner."""
+    """Pixel box ``(x, y, w, h)`` around the mouth; ``w`` spans corner to corner.
+
+    ``natural_w`` (0: the same as ``w``) is the natural mouth width that
+    normalises every metric, when the analysed box is not that wide: an
+    automatic per-frame box follows the corners of a spread or rounded mouth
+    while the scale stays the rest width (:mod:`~visemeface.analysis.mouthbox`).
+    ``found`` is False for an automatic box taken from neighbouring frames
+    because no face was found in and around this one.
+    """
 
     x: int
     y: int
     w: int
     h: int
+    natural_w: int = 0
+    found: bool = True
+
+    @property
+    def mouth_width(self) -> int:
+        """The natural mouth width in pixels: ``natural_w`` if set, else ``w``."""
+        return self.natural_w or self.w
 
     @classmethod
     def of(cls, box) -> MouthBox:
@@ -92,9 +107,10 @@ class MouthBox:
                 f"{width}x{height} frame")
 
     def region(self, pad, width: int, height: int) -> tuple[int, int, int, int]:
-        """``(x0, y0, x1, y1)`` of the box grown by ``pad`` (left, top, right, bottom) x ``w``, clipped."""
+        """``(x0, y0, x1, y1)`` of the box grown by ``pad`` (left, top, right, bottom) x the natural
+        mouth width, clipped."""
         self.check_inside(width, height)
-        left, top, right, bottom = (float(p) * self.w for p in pad)
+        left, top, right, bottom = (float(p) * self.mouth_width for p in pad)
         return (max(0, int(round(self.x - left))), max(0, int(round(self.y - top))),
                 min(width, int(round(self.x + self.w + right))), min(height, int(round(self.y + self.h + bottom))))
 
@@ -353,7 +369,7 @@ class OpeningDetector:
         """
         box = MouthBox.of(box)
         x0, y0, x1, y1 = box.region(self.pad, frame.shape[1], frame.shape[0])
-        w = box.w
+        w = box.mouth_width
         crop = frame[y0:y1, x0:x1]
         if self.method == "seed":
             mask, t = self.opening_mask(crop, w)

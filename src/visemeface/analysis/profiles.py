@@ -321,6 +321,7 @@ def plot_profiles(profiles: Mapping[str, pd.DataFrame], path: str | Path,
     One panel per metric, stacked with a shared time axis; one line per
     profile, labelled with its key in ``profiles``.
     """
+    import matplotlib
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -335,12 +336,13 @@ def plot_profiles(profiles: Mapping[str, pd.DataFrame], path: str | Path,
     axes = fig.subplots(len(metrics), 1, sharex=True, squeeze=False)[:, 0]
     for label, df in profiles.items():
         t = df["time"].to_numpy(float)
+        mark = "o" if len(t) == 1 else None         # a line through one point (a still image) draws nothing
         for ax, c in zip(axes, metrics):
             y = df[c].to_numpy(float)
             if c == "count":
-                ax.step(t, y, where="post", label=label, lw=1.4)
+                ax.step(t, y, where="post", label=label, lw=1.4, marker=mark)
             else:
-                ax.plot(t, y, label=label, lw=1.4)
+                ax.plot(t, y, label=label, lw=1.4, marker=mark)
     for ax, c in zip(axes, metrics):
         ax.set_ylabel(LABELS[c])
         ax.grid(True, alpha=0.3)
@@ -352,5 +354,9 @@ def plot_profiles(profiles: Mapping[str, pd.DataFrame], path: str | Path,
     axes[0].legend(loc="best", fontsize="small")
     if title:
         fig.suptitle(title)
-    with atomic_output(path, force) as tmp:
-        fig.savefig(tmp, format="png")
+    # the format follows the suffix (.png, .pdf, .svg); no date and fixed SVG ids: reruns are identical
+    fmt = Path(path).suffix.lower().lstrip(".")
+    fmt = fmt if fmt in ("pdf", "svg") else "png"
+    meta = {"pdf": {"CreationDate": None}, "svg": {"Date": None}}.get(fmt)
+    with atomic_output(path, force) as tmp, matplotlib.rc_context({"svg.hashsalt": "visemeface"}):
+        fig.savefig(tmp, format=fmt, metadata=meta)

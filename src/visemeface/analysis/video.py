@@ -132,6 +132,8 @@ def open_frames(path: str | Path, fps: float | None = None) -> FrameSource:
         meta = next(gen)
     except (OSError, RuntimeError, StopIteration) as exc:
         gen.close()
+        if "does not contain any stream" in str(exc):     # ffmpeg found no video stream to decode
+            raise InputError("no video stream found (audio only?)", path) from None
         raise InputError(f"cannot read video: {_first_line(exc)}", path) from None
     size = meta.get("size")
     rate = float(fps or meta.get("fps") or 0)

@@ -24,7 +24,7 @@ def register(subparsers) -> None:
                    help="search time offsets of -N..N frames (default 5; 0 = no search)")
     p.add_argument("--lag-metric", choices=("area", "width", "height"), default="height",
                    help="the metric whose correlation the offset maximises (default height)")
-    p.add_argument("--plot", metavar="PNG", help="plot all profiles overlaid, each other one shifted by its lag")
+    p.add_argument("--plot", metavar="PNG", help="plot all profiles overlaid, each other one shifted by its lag (.png, .pdf or .svg)")
     p.add_argument("--force", action="store_true", help="overwrite the plot if it exists")
     p.set_defaults(func=run)
 

@@ -1,0 +1,68 @@
+"""The stable time step from the highest natural frequency (issue 17): exact on a spring chain,
+above the element bound, and the integrator really is stable just under it and unstable just over."""
+
+import numpy as np
+import pytest
+
+from visemeface.errors import SimulationDiverged
+
+from visemeface.physics.hexmesh import box_mesh
+from visemeface.physics.integrator import CentralDifference, FaceModel
+from visemeface.physics.materials import SOFT_TISSUE
+from visemeface.physics.stability import critical_step, max_eigenvalue
+from visemeface.physics.terms import Tissue
+from visemeface.physics.tled import TLEDSolver
+
+
+def test_a_chain_of_springs_has_its_analytic_highest_frequency():
+    # N equal masses, springs k between them and to two walls, moving along x only:
+    # λ_max = (4k/m) sin²(Nπ / (2(N+1))).
+    N, k, m = 40, 250.0, 0.003
+    rng = np.random.default_rng(1)
+    masses = np.full(N, m)
+
+    def forces(u):
+        x = np.concatenate([[0.0], u[:, 0], [0.0]])
+        f = np.zeros((N, 3))
+        f[:, 0] = k * (2 * x[1:-1] - x[:-2] - x[2:])
+        return f
+
+    free = np.zeros((N, 3))
+    free[:, 0] = 1.0
+    lam = max_eigenvalue(forces, rng.normal(0, 1e-4, (N, 3)) * free, masses, free)
+    assert lam == pytest.approx(4 * k / m * np.sin(N * np.pi / (2 * (N + 1))) ** 2, rel=1e-6)
+    assert critical_step(lam) == pytest.approx(2 / np.sqrt(lam))
+    assert critical_step(0.0) == np.inf
+
+
+def _box():
+    m = box_mesh((6, 3, 3), (0.012, 0.006, 0.006))
+    fixed = m.node_sets["xmin"]
+    return TLEDSolver(m, SOFT_TISSUE, dt=1e-5, fixed=fixed)
+
+
+def _model(s, dt):
+    return FaceModel(s, s.mass, s.free.astype(float), dt, 0.0, np.zeros(0, np.int64), None, {"tissue": Tissue(s)})
+
+
+def test_the_element_bound_is_below_the_system_limit():
+    s = _box()
+    lam = max_eigenvalue(s.internal_forces, np.zeros((s.mesh.n_nodes, 3)), s.mass, s.free, scale=0.002)
+    assert s.stable_dt < critical_step(lam) < 3 * s.stable_dt
+
+
+@pytest.mark.parametrize("factor, stable", [(0.97, True), (1.03, False)])
+def test_central_differences_are_stable_just_under_the_limit_and_not_just_over(factor, stable):
+    s = _box()
+    n = s.mesh.n_nodes
+    dt = factor * critical_step(max_eigenvalue(s.internal_forces, np.zeros((n, 3)), s.mass, s.free, scale=0.002))
+    integ = CentralDifference(_model(s, dt))
+    u0 = np.random.default_rng(2).normal(0.0, 1e-9, (n, 3)) * s.free      # linear regime
+    state = integ.start(u0)
+    try:
+        integ.advance(state, 3000)
+    except SimulationDiverged:           # the unstable mode grew until an element inverted
+        growth = np.inf
+    else:
+        growth = np.abs(state.u).max() / np.abs(u0).max()
+    assert (growth < 10.0) == stable, growth
