@@ -4,8 +4,11 @@
     PYTHONPATH=src python benchmarks/sticky.py --seconds 0.2 --skip-speech
 
 1. ``fem_face``: wall seconds per simulated second for the default FEM face
-   (the "open" scenario's first ``--seconds``; target <= 60 s on 2 cores), at
-   each numba thread count in ``--threads``.
+   (the "open" scenario's first ``--seconds``; target <= 10 s on 2 cores, issue 17), at
+   each numba thread count in ``--threads`` and each time step in ``--dt``: ``auto`` (the
+   face's stable limit, the default since issue 17) and ``1e-5`` (the seed's step, the
+   single-rate run before it), back to back in one run; ``speedup`` = the 1e-5 run's
+   wall time / the auto run's at the same thread count.
 2. ``speak_sticky``: the library path ``speak --physics sticky`` takes on the
    3 s example (``transcripts/one_five_zero_zero_six.txt``): transcript ->
    activation track -> :func:`visemeface.physics.drive.simulate_track` ->
@@ -27,10 +30,10 @@ def emit(**kw):
     print(json.dumps(kw), flush=True)
 
 
-def bench_fem_face(seconds: float, threads: int) -> None:
+def bench_fem_face(seconds: float, threads: int, dt: float | None = None) -> float:
     from visemeface.face.procedural import default_face
     from visemeface.muscles.rig import MuscleRig
-    from visemeface.physics.drive import StickySimulation, scenario_track
+    from visemeface.physics.drive import PhysicsSettings, StickySimulation, scenario_track
     from visemeface.physics.face_model import build_fem_face
     from visemeface.runtime import set_threads
 
@@ -40,7 +43,7 @@ def bench_fem_face(seconds: float, threads: int) -> None:
     fem = build_fem_face(face)
     track = scenario_track("open", rig.names, fps=60)
     track = track.iloc[: int(round(seconds * 60)) + 1]
-    sim = StickySimulation(fem, rig, track)
+    sim = StickySimulation(fem, rig, track, settings=PhysicsSettings(dt=dt))
     it = sim.frames()
     next(it)                                   # compile / warm up (frame 0)
     t0 = time.perf_counter()
@@ -52,7 +55,8 @@ def bench_fem_face(seconds: float, threads: int) -> None:
     emit(benchmark="fem_face", threads=threads, nodes=fem.mesh.n_nodes, hexahedra=fem.mesh.n_elements,
          saliva=len(fem.saliva), film_slabs=getattr(getattr(sim, "film", None), "n_elements", None), dt=sim.dt, simulated_s=round(simulated, 4), wall_s=round(wall, 2),
          wall_per_simulated_s=round(wall / simulated, 1), steps_per_s=round(n * sim.steps_per_frame / wall),
-         target_wall_per_simulated_s=60, load_average=os.getloadavg()[0])
+         target_wall_per_simulated_s=10, stable_limit=sim.stability["dt"], load_average=os.getloadavg()[0])
+    return wall / simulated
 
 
 def bench_speak(threads: int) -> None:
@@ -74,7 +78,7 @@ def bench_speak(threads: int) -> None:
     ranges = {n: tuple(r) for n, r in zip(rig.names, rig.ranges)}           # as speak builds it
     track = activation_track(segments, load_visemes(rig=rig), fps=30, ranges=ranges)
     frames = simulate_track(face, rig, track, physics="sticky",
-                            settings=PhysicsSettings())
+                            settings=PhysicsSettings())          # the default: the stable limit
     renderer = Renderer(face, size=(512, 512), view="face")
     n = 0
     for v in frames:
@@ -84,7 +88,7 @@ def bench_speak(threads: int) -> None:
     seconds = (n - 1) / 30.0
     emit(benchmark="speak_sticky", transcript="one_five_zero_zero_six.txt", threads=threads, frames=n,
          simulated_s=round(seconds, 3), wall_s=round(wall, 1), wall_per_simulated_s=round(wall / seconds, 1),
-         load_average=os.getloadavg()[0])
+         target_wall_per_simulated_s=15, load_average=os.getloadavg()[0])
 
 
 def main(argv=None):
@@ -94,11 +98,18 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--seconds", type=float, default=0.5, help="simulated seconds for fem_face (default 0.5)")
     ap.add_argument("--threads", default="1,2", help="numba thread counts to try (default 1,2)")
+    ap.add_argument("--dt", default="auto,1e-5", help="time steps: 'auto' (the stable limit) and/or seconds "
+                    "(default auto,1e-5: after and before issue 17)")
     ap.add_argument("--skip-speech", action="store_true")
     args = ap.parse_args(argv)
     counts = [int(x) for x in args.threads.split(",")]
+    steps = [None if x == "auto" else float(x) for x in args.dt.split(",")]
     for n in counts:
-        bench_fem_face(args.seconds, n)
+        per = {dt: bench_fem_face(args.seconds, n, dt) for dt in steps}
+        if None in per and len(per) > 1:
+            for dt, w in per.items():
+                if dt is not None:
+                    emit(benchmark="fem_face_speedup", threads=n, versus_dt=dt, speedup=round(w / per[None], 2))
     if not args.skip_speech:
         bench_speak(min(counts))
 

@@ -66,3 +66,61 @@ def test_central_differences_are_stable_just_under_the_limit_and_not_just_over(f
     else:
         growth = np.abs(state.u).max() / np.abs(u0).max()
     assert (growth < 10.0) == stable, growth
+
+
+@pytest.fixture(scope="module")
+def coarse_face():
+    from visemeface.face.procedural import default_face
+    from visemeface.muscles.rig import MuscleRig
+    from visemeface.physics.face_model import build_fem_face
+
+    face = default_face(resolution=1500)
+    return build_fem_face(face), MuscleRig.from_file(face)
+
+
+def test_the_face_takes_its_stable_limit_and_refuses_a_longer_step(coarse_face):
+    from visemeface.errors import InputError
+    from visemeface.physics import drive
+
+    fem, rig = coarse_face
+    track = drive.ramp_track(rig.names, 60.0, 0.0, 0.2, 0.1, 0.2)
+    sim = drive.StickySimulation(fem, rig, track)
+    st = sim.stability
+    assert st["dt"] == min(st["spectral"], *st["element"].values())
+    assert st["element"]["saliva"] < st["element"]["tissue"]          # the stiff saliva sets it
+    assert st["tissue_only"] > st["element"]["tissue"]                  # the element bound is the safe side
+    assert 3e-5 < sim.dt <= st["dt"] and sim.steps_per_frame == int(np.ceil(1 / (60 * st["dt"]) - 1e-9))
+    assert drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(dt=1e-5)).dt <= 1e-5
+    with pytest.raises(InputError, match=r"exceeds the stable limit .* of this face; give --dt <="):
+        drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(dt=1.01 * st["dt"]))
+
+
+def _spans(fem, rig, dt, **settings):
+    from visemeface.physics import drive
+
+    track = drive.ramp_track(rig.names, 60.0, 0.05, 0.35, 0.75, 0.35)      # the seed's opening, held
+    out = {}
+    for physics in ("sticky", "elastic"):
+        sim = drive.StickySimulation(fem, rig, track, physics=physics, settings=drive.PhysicsSettings(dt=dt, **settings))
+        frames = list(sim.frames())
+        out[physics] = (np.array([f.saliva["film_open_span"] for f in frames]), frames[-1].vertices)
+    return out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("film", ["seed", "cohesive"])
+def test_the_stable_step_keeps_the_zipper_of_the_seed_step(coarse_face, film):
+    """Issue 17: the figures at the automatic step within 5 % of the single-rate 1e-5 s run."""
+    from visemeface.physics.saliva import RUPTURE_TIME, SalivaParams
+
+    fem, rig = coarse_face
+    settings = {} if film == "seed" else {"film_corners": True, "saliva": SalivaParams(rupture_time=RUPTURE_TIME)}
+    fine, auto = _spans(fem, rig, 1e-5, **settings), _spans(fem, rig, None, **settings)
+    for physics in ("sticky", "elastic"):
+        (a, va), (b, vb) = fine[physics], auto[physics]
+        k0a, k0b = int(np.flatnonzero(a > 0)[0]), int(np.flatnonzero(b > 0)[0])
+        ka, kb = (int(np.flatnonzero(x >= 0.95 * x.max())[0]) for x in (a, b))
+        assert k0a == k0b                                                  # first opening: the same frame
+        assert abs((kb - k0b) - (ka - k0a)) <= max(1, 0.05 * (ka - k0a))   # time to full width within 5 %
+        assert np.abs(a - b).max() <= 0.1                                   # the open span, frame by frame
+        assert np.sqrt(np.mean(np.sum((va - vb) ** 2, axis=1))) <= 0.01 * fem.mouth_width

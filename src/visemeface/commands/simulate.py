@@ -50,7 +50,8 @@ def register(subparsers) -> None:
     phys.add_argument("--glue-file", type=Path, metavar="CSV", help="glue per element (element,glue) or "
                       "profile (s,glue)")
     phys.add_argument("--critical-moisture", type=float, metavar="MC", help="critical moisture Mc (default 100)")
-    phys.add_argument("--dt", type=float, default=1e-5, help="largest time step in s (default 1e-5)")
+    phys.add_argument("--dt", type=float, help="largest time step in s (default: the face's stable limit, "
+                      "printed at the end; a larger one is refused)")
     phys.add_argument("--damping", type=float, default=80.0, help="mass damping alpha in 1/s (default 80)")
     phys.add_argument("--jaw", type=float, default=0.35, help="jaw activation when open (default 0.35)")
     phys.add_argument("--side", choices=SIDES, default="both",
@@ -71,6 +72,8 @@ def _check(args) -> None:
         raise InputError(f"--jaw must be an activation from 0 to 1, got {args.jaw}")
     for name in ("dt", "damping"):
         value = getattr(args, name)
+        if value is None:
+            continue
         if not (math.isfinite(value) and value > 0 if name == "dt" else math.isfinite(value) and value >= 0):
             raise InputError(f"--{name} must be a finite number {'> 0' if name == 'dt' else '>= 0'}, got {value:g}")
     if args.resolution is not None and not 300 <= args.resolution <= 200_000:
@@ -103,6 +106,6 @@ def run(args) -> int:
     if not args.quiet:
         c = motion.sim.fem.counts()
         print(f"FEM face: {c['nodes']} nodes, {c['elements']} hexahedra ({c['saliva']} saliva); "
-              f"dt {motion.sim.dt:.4g} s")
+              f"dt {motion.sim.dt:.4g} s (stable limit {motion.sim.stability['dt']:.4g} s)")
         print(pipeline.summary(stats, args.fps))
     return 0

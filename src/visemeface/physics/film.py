@@ -32,7 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from visemeface.physics import tled as _tled  # noqa: F401  (chooses numba's cache folder first)
-from visemeface.physics.saliva import (FILM_STIFF_STRETCH, SalivaParams, breaking_point, deformation_gradient,
+from visemeface.physics.saliva import (DECAY_STEP, FILM_STIFF_STRETCH, SalivaParams, breaking_point, deformation_gradient,
                                        element_frames, film_gradients, hex_centre_gradients, moisture,
                                        stretch_across)
 
@@ -170,7 +170,7 @@ class SalivaFilm:
         p = self.params
         Z = self._Z0 if p.evaporation == 0.0 else self.breaking_points(t)
         _film_step(u, R, self.n0, self.n1, self.w, self.cgrads, self.grads, self.volumes, self.axis, Z,
-                   state["broken"], state["dry"], state["stored"], state["stretch"], p.decay,
+                   state["broken"], state["dry"], state["stored"], state["stretch"], p.decay ** (dt / DECAY_STEP),
                    p.rebond_strain, p.squeeze, self.modulus, FILM_STIFF_STRETCH, p.soften, state["flow"],
                    self.thickness, self.band, p.film_thickness, p.fluidity, dt, state["damage"], p.strand,
                    p.rupture_time)
@@ -270,7 +270,7 @@ def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, st
     (:func:`visemeface.physics.saliva.film_forces`); then the rule of
     :mod:`visemeface.physics.saliva`: squeezed out below ``squeeze`` (no force
     until back at Q ≥ 1), re-bond on contact (Q ≤ 1, strain ≤ ``rebond``),
-    break at Q ≥ Z keeping this step's pull, then decay it by ``decay`` a step; or, with a
+    break at Q ≥ Z keeping this step's pull, then decay it by ``decay`` a step (the caller passes decay^(dt / 1e-5)); or, with a
     ``strand`` or ``rupture`` > 0, past Z the pull × (1 − D) (:func:`_damage_step`), broken at D = 1.
     """
     uv = np.empty((8, 3))

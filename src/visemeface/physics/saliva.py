@@ -72,6 +72,9 @@ INITIAL_MOISTURE = 100.0
 CRITICAL_MOISTURE = 100.0
 EVAPORATION_RATE = 0.0
 FORCE_DECAY = 0.99
+#: The step (s) the seed's ``decay`` is given for (its 1e-5 s): a step of ``dt`` decays by decay^(dt / DECAY_STEP),
+#: so a broken slab's pull falls with time (τ ≈ 1 ms), not with the number of steps.
+DECAY_STEP = 1e-5
 #: The real saliva film's thickness between the lips, 0.07-0.1 mm (seed 000 §3.4.2, citing [CD87]).
 FILM_THICKNESS = 1e-4
 #: A rupture time (s) for the saliva drawn between parting lips (:attr:`SalivaParams.rupture_time`,
@@ -115,7 +118,7 @@ class SalivaParams:
         and a film that lets go when pressed lets them pass through each other.
         (The neo-Hookean solid may want 0.25: it crushes lip tissue on /p b m/.)
     soften : float
-        0 (default): a broken slab's pull decays by ``decay`` a step (the seed). > 0: a
+        0 (default): a broken slab's pull decays by ``decay`` every 1e-5 s (the seed's step, :data:`DECAY_STEP`). > 0: a
         cohesive law instead: the pull held at the break fades linearly as the film's
         stretch λ = √Q grows from √Z to √Z + ``soften`` (saliva drawn into strands).
     viscosity : float
@@ -148,7 +151,7 @@ class SalivaParams:
         breaking point (a saliva strand thins and snaps over its break-up time, not at
         once); with ``strand`` 0 the film lets go over τ after its breaking point, its pull
         following the lips (the seed's ``decay`` is then unused). 0 with ``strand`` 0: the
-        seed's brittle film (its pull frozen at the break and decayed by ``decay`` a step).
+        seed's brittle film (its pull frozen at the break and decayed by ``decay`` every 1e-5 s).
     """
 
     initial_moisture: float = INITIAL_MOISTURE

@@ -24,6 +24,7 @@ from visemeface.physics.glue import GLUE, glue_per_element
 from visemeface.physics.openings import film_openings, seam_openings
 from visemeface.physics.saliva import SalivaParams
 from visemeface.physics.scenarios import track_values
+from visemeface.physics.stability import face_stable_step
 from visemeface.physics.state import SimState
 
 PHYSICS = ("sticky", "elastic")
@@ -57,7 +58,7 @@ class PhysicsSettings:
     ``field_smoothing`` averages the rig's surface field over quad neighbours.
     """
 
-    dt: float = 1e-5
+    dt: float | None = None
     damping: float = 80.0
     hourglass_kappa: float = 0.075
     glue: float = GLUE
@@ -97,7 +98,7 @@ def _check_settings(physics: str, settings: PhysicsSettings) -> None:
     if physics not in PHYSICS:
         raise InputError(f"unknown physics {physics!r}" + close_matches(physics, PHYSICS)
                          + f"; use one of {', '.join(PHYSICS)}")
-    if not (np.isfinite(settings.dt) and settings.dt > 0):
+    if settings.dt is not None and not (np.isfinite(settings.dt) and settings.dt > 0):
         raise InputError(f"time step must be > 0, got {settings.dt}")
     if not (np.isfinite(settings.posture_hz) and settings.posture_hz >= 0):
         raise InputError(f"posture spring frequency must be >= 0, got {settings.posture_hz}")
@@ -109,6 +110,15 @@ def _check_settings(physics: str, settings: PhysicsSettings) -> None:
         if name not in TERMS:
             raise InputError(f"unknown force term {name!r}" + close_matches(name, TERMS)
                              + f"; known: {', '.join(TERMS)}")
+
+
+def steps_per_frame(fps: float, dt: float | None, limit: float) -> int:
+    """Steps per frame: the fewest whose step is at most ``dt`` (None: the stable ``limit``), so frames
+    fall on steps; a ``dt`` above the stable limit is an :class:`InputError` naming both."""
+    if dt is not None and dt > limit * (1.0 + 1e-9):
+        raise InputError(f"time step {dt:.4g} s exceeds the stable limit {limit:.4g} s of this face; "
+                         f"give --dt <= {limit:.4g} or leave it out (the limit is then used)")
+    return int(np.ceil(1.0 / (fps * (limit if dt is None else dt)) - 1e-9))
 
 
 def build_model(fem, drive, film, settings: PhysicsSettings, dt: float):
@@ -132,7 +142,8 @@ def build_model(fem, drive, film, settings: PhysicsSettings, dt: float):
     free[drive.jaw_nodes] = 0.0
     mass = whole.mass
     active = settings.muscles == "active"
-    terms = {"tissue": T.ActiveTissue(tissue, drive, dt) if active else T.Tissue(tissue),
+    refresh = max(1, int(round(T.REFRESH_SECONDS / dt)))
+    terms = {"tissue": T.ActiveTissue(tissue, drive, dt, refresh) if active else T.Tissue(tissue),
              "muscles": T.MuscleLoads(drive, enabled=not active), "saliva": T.Saliva(film),
              "drag": T.Drag(drive, (settings.damping * mass)[:, None] * free)}
     if settings.posture_hz > 0:
@@ -163,7 +174,9 @@ class StickySimulation:
     Notes
     -----
     The time step is the largest ``dt' ≤ settings.dt`` that divides a frame
-    (``1 / (fps · ceil(1 / (fps · dt)))``), so frames fall exactly on steps.
+    (``1 / (fps · ceil(1 / (fps · dt)))``), so frames fall exactly on steps; ``settings.dt``
+    None (the default) takes the face's stable limit (:func:`~visemeface.physics.stability.face_stable_step`,
+    in :attr:`stability`), and a ``settings.dt`` above that limit is refused.
     Everything is checked (dt against the stable limit, glue, moisture) when
     the object is made, before any simulation time is spent.
     """
@@ -177,8 +190,6 @@ class StickySimulation:
         _check_settings(physics, settings)
         self.fem, self.rig, self.physics, self.settings = fem, rig, physics, settings
         self.values, self.fps = track_values(track, rig)
-        self.steps_per_frame = int(np.ceil(1.0 / (self.fps * settings.dt) - 1e-9))
-        self.dt = 1.0 / (self.fps * self.steps_per_frame)
         if physics == "elastic":
             def glue(s):
                 return np.zeros(len(s))
@@ -193,11 +204,14 @@ class StickySimulation:
             per_layer += len(fem.corner_hexes) // max(len(fem.saliva) // max(per_layer, 1), 1)
         self.film = SalivaFilm(mesh.nodes, hexes, ends, glue, settings.saliva, across=per_layer,
                                min_elements=settings.film_elements)
+        self.stability = face_stable_step(mesh, fem.tissue, self.film, hourglass_kappa=settings.hourglass_kappa)
+        self.steps_per_frame = steps_per_frame(self.fps, settings.dt, self.stability["dt"])
+        self.dt = 1.0 / (self.fps * self.steps_per_frame)
         from visemeface.physics.hexmesh import HexMesh
         from visemeface.physics.materials import SOFT_TISSUE
         from visemeface.physics.tled import TLEDSolver
         loads = TLEDSolver(HexMesh(mesh.nodes, mesh.hexes[fem.tissue], material=np.zeros(len(fem.tissue), np.int64)),
-                           SOFT_TISSUE, dt=min(self.dt, settings.dt), hourglass_kappa=settings.hourglass_kappa)
+                           SOFT_TISSUE, dt=self.dt, hourglass_kappa=settings.hourglass_kappa)
         self.drive = FaceDrive(fem, rig, self.values, self.fps, loads.internal_forces,
                                field_smoothing=settings.field_smoothing, min_jacobian=settings.min_jacobian,
                                lip_bone=settings.lip_bone)

@@ -27,6 +27,11 @@ from __future__ import annotations
 import numpy as np
 
 
+#: How often the active strain's natural shape is refreshed (s): the muscle field moves < 1e-3 of an
+#: element in that time (10 steps of the seed's 1e-5 s; every step when the step is longer).
+REFRESH_SECONDS = 1e-4
+
+
 class Term:
     """A force term: ``add(state, t, R)`` adds its force (n, 3) to ``R`` in place."""
 
