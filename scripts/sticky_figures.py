@@ -40,8 +40,10 @@ from visemeface.physics import drive
 from visemeface.physics.face_model import build_fem_face
 
 IMAGES = Path(__file__).resolve().parents[1] / "docs" / "images"
-#: Seconds the jaw takes to open in the zipper and glue-0.3 figures (``--ramp``).
-RAMP = 0.25
+#: Seconds the jaw takes to open in the zipper and glue-0.3 figures (``--ramp``; 0: the seed scenario).
+RAMP = 0.0
+#: The zipper picture's file name in docs/images/ (``--image``).
+IMAGE = "sticky_zipper.png"
 
 
 def emit(**kw):
@@ -106,15 +108,23 @@ def video_zipper(fem, runs, fps):
              first_open_frame=first, frames_to_90pct=None if first is None else full - first + 1,
              distinct_widths=int(len(np.unique(np.round(vw[vw > 0], 3)))))
         k = first if first is not None else len(imgs) // 2
-        pick = list(range(max(k - 2, 0), min(k + 5, len(imgs))))
+        last = full if full is not None else k + 5
+        pick = sorted(set(np.linspace(max(k - 1, 0), min(max(last + 1, k + 6), len(imgs) - 1), 8).round().astype(int)))
         strips.append(np.concatenate([imgs[i][140:372] for i in pick], axis=1))
     w = min(x.shape[1] for x in strips)
     IMAGES.mkdir(parents=True, exist_ok=True)
-    write_png(IMAGES / "sticky_zipper.png", np.concatenate([x[:, :w] for x in strips], axis=0)[::2, ::2].copy())
+    write_png(IMAGES / IMAGE, np.concatenate([x[:, :w] for x in strips], axis=0)[::2, ::2].copy())
+
+
+def zipper_track(rig, fps):
+    """Seed 000/001's single opening (scenario ``open-once``: the jaw eased to 0.35 from 0.05 s to
+    0.40 s), held 0.75 s (the scenario's 0.35 s hold ends before a 0.3 s zipper has reached the
+    corners); ``--ramp`` seconds instead of 0.35 s if given."""
+    return drive.ramp_track(rig.names, fps, 0.05, RAMP or 0.35, 0.75, 0.35)
 
 
 def fig_zipper(fem, rig, fps, common):
-    tr = drive.ramp_track(rig.names, fps, 0.02, RAMP, 0.08, 0.35)
+    tr = zipper_track(rig, fps)
     runs = {}
     for name, physics, extra in (("sticky", "sticky", {}), ("elastic", "elastic", {}), ("glue0", "sticky", {"glue": 0.0}),
                                  ("sticky_no_drag", "sticky", {"off": ("drag",)})):
@@ -132,7 +142,7 @@ def fig_zipper(fem, rig, fps, common):
 
 
 def fig_merge(fem, rig, fps, common):
-    tr = drive.ramp_track(rig.names, fps, 0.02, 0.25, 0.05, 0.30)
+    tr = zipper_track(rig, fps)
     sim, frames = run(fem, rig, tr, "sticky", glue_profile="centre=0.18", **common)
     counts = [f["film_open_count"] for f in frames]
     spans = np.array([f["film_open_span"] for f in frames])
@@ -142,7 +152,7 @@ def fig_merge(fem, rig, fps, common):
 
 
 def fig_glue03(fem, rig, fps, common, runs):
-    tr = drive.ramp_track(rig.names, fps, 0.02, RAMP, 0.08, 0.35)
+    tr = zipper_track(rig, fps)
     sim, frames = run(fem, rig, tr, "sticky", glue=0.3, **common)
     m = zipper_measures(sim, frames, fps)
     ref = zipper_measures(*runs["sticky"], fps) if runs else {}
@@ -234,7 +244,15 @@ def main():
                     help="cohesive softening stretch of a broken film (0: the seed's 0.99-a-step decay)")
     ap.add_argument("--viscosity", type=float, default=float("inf"),
                     help="saliva viscosity, Pa s, for its Stefan flow (inf: the seed's solid film that does not flow)")
-    ap.add_argument("--ramp", type=float, default=0.25, help="zipper/glue03: seconds the jaw takes to open")
+    ap.add_argument("--rupture-time", type=float, default=None,
+                    help="saliva strand rupture time, s (default 0: with --strand 0 the seed's brittle film; "
+                         "the zipper figures: 0.03)")
+    ap.add_argument("--strand", type=float, default=0.0, help="cohesive strand length, m (0: none)")
+    ap.add_argument("--film-corners", action="store_true",
+                    help="carry the film into the mouth corners (default: it ends at the last seam pair, a free end)")
+    ap.add_argument("--image", default="sticky_zipper.png", help="zipper picture's name in docs/images/")
+    ap.add_argument("--ramp", type=float, default=0.0,
+                    help="zipper/glue03: seconds the jaw takes to open (0: seed scenario open-once)")
     ap.add_argument("--posture-hz", type=float, default=0.0, help="uniform posture spring (Hz, 0 = none)")
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--visemes", default=None, help="calibration: comma-separated DECtalk symbols (default all)")
@@ -245,13 +263,14 @@ def main():
     fem, rig = build_fem_face(face), MuscleRig.from_file(face)
     only = set(args.only.split(","))
     from visemeface.physics.saliva import SalivaParams
-    common = {"lip_bone": args.lip_bone, "posture_hz": args.posture_hz, "muscles": args.muscles}
-    if args.soften or np.isfinite(args.viscosity):
-        common["saliva"] = SalivaParams(soften=args.soften, viscosity=args.viscosity)
-    global RAMP
-    RAMP = args.ramp
+    common = {"lip_bone": args.lip_bone, "posture_hz": args.posture_hz, "muscles": args.muscles,
+              "film_corners": args.film_corners}
+    extra = {} if args.rupture_time is None else {"rupture_time": args.rupture_time}
+    common["saliva"] = SalivaParams(soften=args.soften, viscosity=args.viscosity, strand=args.strand, **extra)
+    global RAMP, IMAGE
+    RAMP, IMAGE = args.ramp, args.image
     emit(figure="settings", resolution=args.resolution, fps=args.fps, soften=args.soften, viscosity=args.viscosity,
-         ramp=args.ramp,
+         ramp=args.ramp, rupture_time=common["saliva"].rupture_time, strand=args.strand,
          **{k: v for k, v in common.items() if k != "saliva"})
     if "counts" in only:
         sim = drive.StickySimulation(fem, rig, drive.ramp_track(rig.names, args.fps, 0.0, 0.02, 0.0, 0.1))

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from visemeface.physics import saliva as sv
+from visemeface.physics.film import SNAPPED
 
 
 def reference_step(film, u, t: float, state: dict, dt: float = 1e-5) -> np.ndarray:
@@ -42,9 +43,32 @@ def reference_step(film, u, t: float, state: dict, dt: float = 1e-5) -> np.ndarr
     dry &= ~back
     broken &= ~back
     squeezed = (Q < p.squeeze) | dry
-    broken &= ~((Q <= 1.0) & (strain <= p.rebond_strain) & ~squeezed)
-    newly = ~broken & ((Qe >= Z) | (Q >= 1e300)) & ~squeezed
+    rebond = broken & (Q <= 1.0) & (strain <= p.rebond_strain) & ~squeezed
+    broken &= ~rebond
+    damage = state["damage"]
+    damage[squeezed | rebond] = 0.0
+    cohesive = np.zeros(len(Q), bool)
+    if p.strand > 0 or p.rupture_time > 0:
+        cohesive = ~broken & ~squeezed & (Q < 1e300) & ((Qe >= Z) | (damage > 0))
+        contact = cohesive & (Q <= 1.0)
+        damage[contact] = 0.0
+        xp = np.sqrt(Z)
+        dp, dl = (xp - 1.0) * film.thickness, (x - 1.0) * film.thickness
+        sp, se = sv._film_stress(xp, film.modulus), sv._film_stress(x, film.modulus)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            d = np.where(se > 0, 1.0 - sp * (dp + p.strand - dl) / (p.strand * se), 1.0)
+        d = np.where(dl <= dp, damage, np.where(dl >= dp + p.strand, 1.0, np.minimum(np.maximum(d, damage), 1.0)))
+        if p.rupture_time > 0:
+            d = damage + (1.0 - np.exp(-dt / p.rupture_time)) * (d - damage)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                d = np.where(se > sp, np.maximum(d, 1.0 - sp / se), d)
+        upd = cohesive & ~contact
+        damage[upd] = d[upd]
+        pull[cohesive] *= (1.0 - damage[cohesive])[:, None, None]
+    snapped = cohesive & (damage >= SNAPPED)
+    newly = ~broken & ~cohesive & ((Qe >= Z) | (Q >= 1e300)) & ~squeezed
     stored[newly] = pull[newly]
+    stored[snapped] = 0.0
     if p.soften > 0:                                   # cohesive softening with the stretch
         fac = np.clip(1.0 - (np.sqrt(np.minimum(Q, 1e30)) - np.sqrt(Z)) / p.soften, 0.0, 1.0)
     else:
@@ -52,7 +76,7 @@ def reference_step(film, u, t: float, state: dict, dt: float = 1e-5) -> np.ndarr
         fac = np.ones(len(Q))
     out = pull + push
     out[broken] = stored[broken] * fac[broken, None, None] + push[broken]
-    broken |= newly | squeezed
+    broken |= newly | squeezed | snapped
     dry |= squeezed
     stored[squeezed] = 0.0
     out[squeezed] = 0.0

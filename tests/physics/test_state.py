@@ -12,7 +12,7 @@ from visemeface.physics.state import SimState
 def test_state_round_trips_through_npz_bit_for_bit():
     rng = np.random.default_rng(1)
     saliva = {"broken": rng.random(7) > 0.5, "dry": rng.random(7) > 0.8, "stored": rng.normal(size=(7, 8, 3)),
-              "stretch": rng.random(7) + 1.0, "flow": rng.random(7) * 0.1}
+              "stretch": rng.random(7) + 1.0, "flow": rng.random(7) * 0.1, "damage": rng.random(7)}
     st = SimState(rng.normal(size=(20, 3)), rng.normal(size=(20, 3)), 12345, 1.0 / 60 / 1667, saliva)
     buf = io.BytesIO()
     np.savez(buf, **st.to_dict())
@@ -27,6 +27,9 @@ def test_state_round_trips_through_npz_bit_for_bit():
     c.u[0, 0] += 1.0
     c.saliva["broken"][:] = ~c.saliva["broken"]
     assert st.u[0, 0] != c.u[0, 0] and (st.saliva["broken"] != c.saliva["broken"]).all()   # a deep copy
+    # a checkpoint from before the film had a cohesive damage resumes with none
+    old = {k: v for k, v in st.to_dict().items() if k != "saliva_damage"}
+    np.testing.assert_array_equal(SimState.from_dict(old).saliva["damage"], np.zeros(7))
 
 
 def test_film_openings_grow_slab_by_slab(fem_face):

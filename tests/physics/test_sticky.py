@@ -100,8 +100,11 @@ def _step(film, X, state, F, t=0.0):
     return -R, u
 
 
+BRITTLE = sv.SalivaParams(rupture_time=0.0)        # the seed's film: breaks at Z, its pull frozen and decayed
+
+
 def test_saliva_breaks_at_Z_then_force_decays_geometrically():
-    film, X, st = _films(0.08)
+    film, X, st = _films(0.08, BRITTLE)
     f, _ = _step(film, X, st, _stretched(_box(), np.sqrt(1.079))[0])
     assert not st["broken"][0] and np.abs(f).max() > 0
     above = _stretched(_box(), np.sqrt(1.081))[0]
@@ -123,7 +126,7 @@ def test_pressed_puckered_lips_rebond_and_stick_again():
     # /m/: the lips pressed (film squeezed out) and gathered along the seam by the
     # sphincter (in-plane strain 0.4); on release the film re-forms as soon as the
     # lips are back at the film's thickness, and holds until Q reaches Z again.
-    film, X, st = _films(0.08, sv.SalivaParams(squeeze=0.25))
+    film, X, st = _films(0.08, sv.SalivaParams(squeeze=0.25, rupture_time=0.0))
     pucker = np.diag([0.6, 1.0, 1.0])
     _step(film, X, st, _stretched(_box(), 0.4)[0] @ pucker)
     assert st["broken"][0]                                # squeezed out (Q = 0.16)
@@ -211,12 +214,18 @@ def test_compression_never_breaks_and_no_glue_breaks_on_any_stretch():
 
 
 def test_evaporation_lowers_the_breaking_point_over_time():
-    film, X, st = _films(0.08, sv.SalivaParams(evaporation=50.0))
+    film, X, st = _films(0.08, sv.SalivaParams(evaporation=50.0, rupture_time=0.0))
     lam = np.sqrt(1.05)
     _step(film, X, st, _stretched(_box(), lam)[0])
     assert not st["broken"][0]                       # Z(0) = 1.08
     _step(film, X, st, _stretched(_box(), lam)[0], 1.0)
     assert st["broken"][0]                           # Z(1 s) = 1.04
+    # a film with a rupture time starts to let go at the lower breaking point too
+    film, X, st = _films(0.08, sv.SalivaParams(evaporation=50.0, rupture_time=sv.RUPTURE_TIME))
+    _step(film, X, st, _stretched(_box(), lam)[0])
+    assert st["damage"][0] == 0.0
+    _step(film, X, st, _stretched(_box(), lam)[0], 1.0)
+    assert 0.0 < st["damage"][0] < 1.0 and not st["broken"][0]
 
 
 def test_saliva_params_refuse_negative_moisture():
@@ -269,18 +278,20 @@ def test_glue_file_layouts(tmp_path):
         sv.read_glue_file(p, np.zeros(3))
 
 
-@pytest.mark.parametrize("refine,soften,viscosity", [(1, 0.0, np.inf), (4, 0.0, np.inf), (4, 0.05, np.inf),
-                                                    (4, 0.0, 3e-4), (1, 0.0, 3e-3)])
-def test_compiled_film_follows_the_numpy_reference(refine, soften, viscosity):
+@pytest.mark.parametrize("refine,soften,viscosity,strand,rupture", [
+    (1, 0.0, np.inf, 0.0, 0.0), (4, 0.0, np.inf, 0.0, 0.0), (4, 0.05, np.inf, 0.0, 0.0), (4, 0.0, 3e-4, 0.0, 0.0),
+    (1, 0.0, 3e-3, 0.0, 0.0), (4, 0.0, np.inf, 1e-4, 0.0), (1, 0.0, 3e-3, 1e-3, 0.0), (4, 0.0, np.inf, 0.0, 3e-6),
+    (1, 0.0, np.inf, 1e-4, 3e-6)])
+def test_compiled_film_follows_the_numpy_reference(refine, soften, viscosity, strand, rupture):
     from film_reference import reference_step
     rng = np.random.default_rng(0)
-    params = sv.SalivaParams(squeeze=0.25, soften=soften, viscosity=viscosity)
+    params = sv.SalivaParams(squeeze=0.25, soften=soften, viscosity=viscosity, strand=strand, rupture_time=rupture)
     a, X, sa = _films([0.0, 0.08, 0.3], params, n=3, refine_to=3 * refine)
     b, _, sb = _films([0.0, 0.08, 0.3], params, n=3, refine_to=3 * refine)
     assert a.n_elements == 3 * refine
     shear = np.array([[1.0, 0.3, 0.0], [0.0, 1.0, 0.0], [0.1, 0.0, 0.8]])
     Xc = X.reshape(3, 8, 3) - X.reshape(3, 8, 3).mean(axis=1, keepdims=True)
-    seen, flowed = set(), False
+    seen, flowed, softened = set(), False, False
     for step, lam in enumerate([1.0, 1.02, 1.05, 1.2, 1.1, 0.99, 0.3, 0.9, 1.03, 1.5]):
         F = np.stack([_stretched(_box(), lam + 0.01 * i)[0] @ shear for i in range(3)])
         u = np.einsum("eij,eaj->eai", F - np.eye(3), Xc).reshape(-1, 3)
@@ -293,10 +304,13 @@ def test_compiled_film_follows_the_numpy_reference(refine, soften, viscosity):
             assert sa[k].tolist() == sb[k].tolist()
         np.testing.assert_allclose(sa["stored"], sb["stored"], rtol=1e-9, atol=1e-15)
         np.testing.assert_allclose(sa["flow"], sb["flow"], rtol=1e-9, atol=1e-15)
+        np.testing.assert_allclose(sa["damage"], sb["damage"], rtol=1e-9, atol=1e-15)
+        softened = softened or bool(((sa["damage"] > 0) & (sa["damage"] < 1)).any())
         flowed = flowed or bool(sa["flow"].any())
         seen.update(zip(sa["broken"].tolist(), sa["dry"].tolist()))
     assert seen == {(False, False), (True, False), (True, True)}      # intact, broken and squeezed out
     assert flowed == np.isfinite(viscosity)                           # a viscous film flows, a solid one not
+    assert softened == (strand > 0 or rupture > 0)                    # a cohesive film softens before it breaks
 
 
 def test_film_slabs_tile_their_hexahedron_and_their_forces_add_up():
@@ -372,9 +386,10 @@ def test_same_equilibrium_with_and_without_glue_once_open_wide(model, opened):
     assert rms_kin <= 0.05
 
 
-@pytest.mark.xfail(strict=True, reason="issue 16 open: the drive loads the film almost evenly (gap without glue "
-                   "within 2 % over the middle third, 0.67-0.72 at the film's ends), so the first break sheds its load "
-                   "onto slabs a few % short of breaking: a static cascade over the seam in ~6 ms (README)")
+@pytest.mark.xfail(strict=True, reason="issue 16 open with the default (seed's) film: its free ends by the unglued "
+                   "corner slit carry 1.2-1.3x the centre's stretch and its brittle release cascades over the seam in one "
+                   "frame; film_corners + a rupture time unzip the coarse face from the centre (test_zipper.py) but are "
+                   "not the default (on the default face that film holds to jaw 0.35)")
 def test_sticky_lips_part_at_the_centre_first_and_later_than_elastic(model, opened):
     fem, _ = model
     s_frames = opened["sticky"][1]
@@ -418,8 +433,9 @@ def full_model():
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="issue 16 open: the glued seam gives way in one static cascade "
-                   "(about 6 ms, scripts/sticky_figures.py --only merge; also with saliva flow): no lasting two openings")
+@pytest.mark.xfail(strict=True, reason="issue 16 open: the seed's film gives way in one cascade (about 6 ms); the "
+                   "cohesive film (film_corners, rupture time 30 ms) with central glue 0.18 holds the whole seam at jaw "
+                   "0.35 and shows two openings for 2 frames at 60 fps at jaw 0.5 (scripts/sticky_figures.py --only merge)")
 def test_central_glue_gives_two_openings_that_merge(full_model):
     fem, rig = full_model
     _, frames = _run(full_model, _ramp(rig, fps=200, ramp=0.25, hold=0.0, jaw=0.25), glue_profile="centre=0.18")
@@ -496,7 +512,7 @@ def test_bad_physics_input_is_refused_before_simulating(model):
     with pytest.raises(InputError, match="exceeds the stable limit"):
         drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(dt=1e-3))
     with pytest.raises(InputError, match="names no saliva element"):
-        drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(glue_profile="0.95..0.99=1"))
+        drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(glue_profile="1.2..1.5=1"))
     with pytest.raises(InputError, match="saliva viscosity must be > 0"):
         drive.SalivaParams(viscosity=0.0)
     with pytest.raises(InputError, match="film thickness must be > 0"):
@@ -606,6 +622,8 @@ def test_each_term_alone_pushes_the_way_it_should(model):
     film_only = drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(off=("drag",)))
     st = film_only.initial_state()
     up, lo = np.unique(film_only.film.n0[:, [2, 3, 6, 7]]), np.unique(film_only.film.n0[:, [0, 1, 4, 5]])
+    corner = np.intersect1d(up, lo)                               # the mouth corners: both lips' node
+    up, lo = np.setdiff1d(up, corner), np.setdiff1d(lo, corner)
     st.u[up, 1] += 5e-5                                           # lips 5 % further apart than the film
     st.u[lo, 1] -= 5e-5
     R = film_only.model.external(st, 0.0, np.zeros_like(st.u))

@@ -116,6 +116,10 @@ def add_physics_arguments(p: argparse.ArgumentParser, default: str, choices: tup
                    "centre=0.18 or right=0.3,left=0 (WHERE: centre, left, right, corners, all, a..b)")
     g.add_argument("--moisture", type=float, metavar="M", help="initial saliva moisture 0M (default 100)")
     g.add_argument("--evaporation", type=float, metavar="E", help="moisture lost per second (default 0)")
+    g.add_argument("--rupture-time", type=float, metavar="S", help="saliva strands thin over S seconds before they "
+                   "snap (e.g. 0.03, the zipper; default 0: the seed's brittle film)")
+    g.add_argument("--film-corners", action="store_true", default=None,
+                   help="carry the saliva film into the mouth corners (with --rupture-time: lips unzip from the centre)")
     return g
 
 
@@ -123,8 +127,8 @@ def physics_from_args(args, **more):
     """:class:`PhysicsSettings` of the options (checked), or None for ``--physics none``."""
     from visemeface.errors import InputError
 
-    given = [f"--{n.replace('_', '-')}" for n in ("glue", "glue_profile", "moisture", "evaporation")
-             if getattr(args, n, None) is not None]
+    given = [f"--{n.replace('_', '-')}" for n in ("glue", "glue_profile", "moisture", "evaporation", "rupture_time",
+                                                  "film_corners") if getattr(args, n, None) is not None]
     if args.physics == "none":
         if given:
             raise InputError(f"{given[0]} needs --physics sticky or elastic")
@@ -139,6 +143,10 @@ def physics_from_args(args, **more):
         params["evaporation"] = args.evaporation
     if getattr(args, "critical_moisture", None) is not None:
         params["critical_moisture"] = args.critical_moisture
+    if getattr(args, "rupture_time", None) is not None:
+        params["rupture_time"] = args.rupture_time
+    if getattr(args, "film_corners", None):
+        more["film_corners"] = True
     if args.glue is not None:
         if not (math.isfinite(args.glue) and args.glue >= 0):
             raise InputError(f"--glue must be >= 0 and finite, got {args.glue:g}")
@@ -147,7 +155,8 @@ def physics_from_args(args, **more):
         saliva = dataclasses.replace(SalivaParams(), **params)
     except InputError as e:
         raise InputError(str(e).replace("moisture must", "--moisture must")
-                         .replace("evaporation rate must", "--evaporation must")) from None
+                         .replace("evaporation rate must", "--evaporation must")
+                         .replace("saliva rupture time must", "--rupture-time must")) from None
     return PhysicsSettings(glue_profile=args.glue_profile, saliva=saliva, **more)
 
 

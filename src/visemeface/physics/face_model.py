@@ -91,6 +91,11 @@ class FEMFace:
     lip_weight : (S,) float
         1 under the lips, 0 away from them, blended over two rings: where the
         bone side is the lips' own muscle layer rather than skull or jaw.
+    corner_hexes : (C, 8) int
+        The saliva between the last seam pair and each mouth corner, where the lips
+        meet: wedges (the corner's two nodes are one), for the film alone
+        (:class:`~visemeface.physics.film.SalivaFilm`), not the mesh; ``corner_s`` (C, 2)
+        their ξ− and ξ+ faces across the mouth.
     """
 
     face: FaceMesh
@@ -105,6 +110,8 @@ class FEMFace:
     mouth_width: float
     depth_fraction: np.ndarray | None = None
     lip_weight: np.ndarray | None = None
+    corner_hexes: np.ndarray | None = None
+    corner_s: np.ndarray | None = None
 
     @property
     def n_surface(self) -> int:
@@ -373,11 +380,31 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
     from visemeface.physics.hexmesh import check_quality
     check_quality(mesh, max_aspect=None)
     saliva = np.arange(len(tissue.hexes), len(hexes))
+    corners, corner_s = _corner_wedges(face, pairs, node_of, seam_s, S, saliva_layers)
     return FEMFace(face=face, mesh=mesh, surface_vertices=tissue.surface_vertices, layers=layers,
                    saliva=saliva, saliva_pairs=np.tile(np.stack([a, b], axis=1), (saliva_layers, 1)),
                    saliva_s=np.tile(0.5 * (seam_s[a] + seam_s[b]), saliva_layers),
                    seam_pairs=pairs, seam_s=seam_s, mouth_width=width,
-                   depth_fraction=depth_fraction, lip_weight=lip_w[tissue.surface_vertices])
+                   depth_fraction=depth_fraction, lip_weight=lip_w[tissue.surface_vertices],
+                   corner_hexes=corners, corner_s=corner_s)
+
+
+def _corner_wedges(face: FaceMesh, pairs, node_of, seam_s, S: int, layers: int):
+    """Saliva wedges from the end seam pairs into the mouth corners (where the seams meet), per layer."""
+    hexes, ends = [], []
+    for name, end, sign in (("mouth_corner_right", 0, -1.0), ("mouth_corner_left", -1, 1.0)):
+        c = face.landmarks.get(name)
+        if c is None or node_of[c] < 0 or not (np.isin(c, face.region("lip_seam_upper"))
+                                               and np.isin(c, face.region("lip_seam_lower"))):
+            continue
+        up, lo = node_of[[c, pairs[end, 0]]], node_of[[c, pairs[end, 1]]]
+        if sign > 0:
+            up, lo = up[::-1], lo[::-1]
+        hexes.append(_saliva_hexes(up, lo, S, layers))
+        ends.append(np.tile(sorted([sign, seam_s[end]]), (layers, 1)))
+    if not hexes:
+        return np.zeros((0, 8), np.int64), np.zeros((0, 2))
+    return np.concatenate(hexes), np.concatenate(ends)
 
 
 def _gapped_pairs(face: FaceMesh, pairs, min_gap: float) -> np.ndarray:

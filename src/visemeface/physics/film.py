@@ -18,8 +18,13 @@ The per-slab rule (stretch, breaking, decay, contact, re-bond, squeeze) is
 :func:`_film_step`, written once and compiled; its plain-numpy reference is in
 ``tests/physics/film_reference.py``. The film's state (``broken``, ``dry``,
 ``stored``, ``stretch``, ``flow``: the stretch taken up by the saliva's viscous
-flow, :attr:`~visemeface.physics.saliva.SalivaParams.viscosity`) lives in the simulation's
+flow, :attr:`~visemeface.physics.saliva.SalivaParams.viscosity`; ``damage``: the cohesive
+law's D, :attr:`~visemeface.physics.saliva.SalivaParams.rupture_time`) lives in the simulation's
 :class:`~visemeface.physics.state.SimState`, not here.
+
+The film may run on into the mouth corners (wedges from the last seam pair to the corner
+node both lips share, :attr:`~visemeface.physics.face_model.FEMFace.corner_hexes`): then it
+has no free end, whose notch tip otherwise carries 1.2-1.3x the centre's stretch.
 """
 
 from __future__ import annotations
@@ -34,6 +39,9 @@ from visemeface.physics.saliva import (FILM_STIFF_STRETCH, SalivaParams, breakin
 #: Least number of film slabs across the mouth (issue 16: the open span grows in steps
 #: of at most 1/48 of the mouth, whatever the face mesh's resolution).
 FILM_ELEMENTS = 48
+#: Damage at which a cohesive slab counts as snapped (its last 0.1 % of pull dropped; a
+#: first-order rupture approaches 1 only asymptotically).
+SNAPPED = 0.999
 #: ξ-partner of each hex8 node (0-1, 3-2, 4-5, 7-6) and whether the node is on the ξ+ side.
 _PARTNER = np.array([1, 0, 3, 2, 5, 4, 7, 6])
 _XI_PLUS = np.array([False, True, True, False, False, True, True, False])
@@ -118,7 +126,8 @@ class SalivaFilm:
         _film_step(z, z.copy(), self.n0[:0], self.n1[:0], self.w[:0], self.cgrads[:0], self.grads[:0],
                    self.volumes[:0], self.axis[:0], self._Z0[:0], st["broken"], st["dry"], st["stored"],
                    st["stretch"], p.decay, p.rebond_strain, p.squeeze, self.modulus, FILM_STIFF_STRETCH, p.soften,
-                   st["flow"], self.thickness[:0], self.band[:0], p.film_thickness, p.fluidity, 1e-5)
+                   st["flow"], self.thickness[:0], self.band[:0], p.film_thickness, p.fluidity, 1e-5,
+                   st["damage"], p.strand, p.rupture_time)
 
     @property
     def n_elements(self) -> int:
@@ -148,7 +157,8 @@ class SalivaFilm:
         """The film's state at ``u`` (default rest): slabs already stretched past Z start parted."""
         E = self.n_elements
         state = {"broken": np.zeros(E, dtype=np.bool_), "dry": np.zeros(E, dtype=np.bool_),
-                 "stored": np.zeros((E, 8, 3)), "stretch": np.ones(E), "flow": np.zeros(E)}
+                 "stored": np.zeros((E, 8, 3)), "stretch": np.ones(E), "flow": np.zeros(E),
+                 "damage": np.zeros(E)}
         if u is not None:
             Q = self.stretch(u)
             state["stretch"][:] = np.minimum(Q, 1e300)
@@ -162,7 +172,8 @@ class SalivaFilm:
         _film_step(u, R, self.n0, self.n1, self.w, self.cgrads, self.grads, self.volumes, self.axis, Z,
                    state["broken"], state["dry"], state["stored"], state["stretch"], p.decay,
                    p.rebond_strain, p.squeeze, self.modulus, FILM_STIFF_STRETCH, p.soften, state["flow"],
-                   self.thickness, self.band, p.film_thickness, p.fluidity, dt)
+                   self.thickness, self.band, p.film_thickness, p.fluidity, dt, state["damage"], p.strand,
+                   p.rupture_time)
 
 
 from numba import njit  # noqa: E402
@@ -206,9 +217,51 @@ def _pull_push(k, uv, n, grads, volumes, modulus, lc, flow, pull, push):  # prag
                 push[a, 2] += gn * f2
 
 
+@njit(inline="always", cache=True)
+def _cohesive_damage(x, Z, d_old, thick, strand, modulus, lc):  # pragma: no cover - compiled
+    """Damage D of a slab on the film's softening branch (a bilinear cohesive law).
+
+    In the separation δ = (x − 1)·h across the lips (h the slab's rest thickness, x the
+    elastic stretch): elastic up to the breaking point δ_p = (√Z − 1) h, where the film
+    pulls σ_p = σ(√Z); then the traction falls linearly to zero at δ_p + ``strand``,
+    T(δ) = σ_p (δ_p + strand − δ) / strand. The pull is (1 − D) σ(x) with
+    D = max(D_old, 1 − T(δ)/σ(x)) (irreversible: unloading goes back toward zero
+    along the damaged stiffness). The energy to part the film is
+    G_c = ½ σ_p (δ_p + strand) per unit area, whatever the slab's size.
+    """
+    xp = np.sqrt(Z)
+    dp = (xp - 1.0) * thick
+    dlt = (x - 1.0) * thick
+    if dlt <= dp:
+        return d_old
+    if dlt >= dp + strand:
+        return 1.0                                # (strand 0: a brittle break, D_s = 1 past the peak)
+    sp = _film_stress(xp, modulus, lc)
+    se = _film_stress(x, modulus, lc)
+    d = 1.0 - sp * (dp + strand - dlt) / (strand * se) if se > 0.0 else 1.0
+    return min(max(d, d_old), 1.0)
+
+
+@njit(inline="always", cache=True)
+def _damage_step(Q, x, Z, d_old, thick, strand, rupture, dt, modulus, lc):  # pragma: no cover - compiled
+    """A cohesive slab's damage after this step: 0 back in contact (Q ≤ 1: the film is whole
+    again); else the law's value (:func:`_cohesive_damage`), reached over the ``rupture`` time
+    (a strand thins before it snaps) but never pulling harder than at the breaking point."""
+    if Q <= 1.0:
+        return 0.0
+    d = _cohesive_damage(x, Z, d_old, thick, strand, modulus, lc)
+    if rupture > 0.0:
+        d = d_old + (1.0 - np.exp(-dt / rupture)) * (d - d_old)
+        sp = _film_stress(np.sqrt(Z), modulus, lc)
+        se = _film_stress(x, modulus, lc)
+        if se > sp:
+            d = max(d, 1.0 - sp / se)
+    return d
+
+
 @njit(cache=True)
-def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, stored, stretch, decay, rebond,
-               squeeze, modulus, lc, soften, flow, thick, band, h0, fluidity, dt):  # pragma: no cover - compiled
+def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, stored, stretch, decay, rebond, squeeze,
+               modulus, lc, soften, flow, thick, band, h0, fluidity, dt, damage, strand, rupture):  # pragma: no cover
     """One step of every slab: the film's force law and breaking rule; R -= its nodal forces.
 
     Per slab (nodes interpolated from the tissue, see the module docstring):
@@ -217,7 +270,8 @@ def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, st
     (:func:`visemeface.physics.saliva.film_forces`); then the rule of
     :mod:`visemeface.physics.saliva`: squeezed out below ``squeeze`` (no force
     until back at Q ≥ 1), re-bond on contact (Q ≤ 1, strain ≤ ``rebond``),
-    break at Q ≥ Z keeping this step's pull, then decay it by ``decay`` a step.
+    break at Q ≥ Z keeping this step's pull, then decay it by ``decay`` a step; or, with a
+    ``strand`` or ``rupture`` > 0, past Z the pull × (1 − D) (:func:`_damage_step`), broken at D = 1.
     """
     uv = np.empty((8, 3))
     pull = np.empty((8, 3))
@@ -265,9 +319,8 @@ def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, st
         if dry[k] or Q < squeeze:                  # squeezed out between pressed lips: no force
             dry[k] = True
             broken[k] = True
-            for a in range(8):
-                for i in range(3):
-                    stored[k, a, i] = 0.0
+            damage[k] = 0.0
+            stored[k] = 0.0
             continue
         if broken[k] and Q <= 1.0:
             strain = 0.0
@@ -279,6 +332,7 @@ def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, st
                     strain = max(strain, abs(cij))
             if strain <= rebond:
                 broken[k] = False                  # lips back together: re-bond
+                damage[k] = 0.0
         if broken[k]:
             fac = 1.0
             if soften > 0.0:                       # cohesive softening with the film's stretch
@@ -288,6 +342,12 @@ def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, st
                     if soften <= 0.0:
                         stored[k, a, i] *= decay
                     pull[a, i] = stored[k, a, i] * fac   # the decaying pull, and contact
+        elif (strand > 0.0 or rupture > 0.0) and Q < 1e300 and (Qe >= Z[k] or damage[k] > 0.0):
+            damage[k] = _damage_step(Q, x, Z[k], damage[k], thick[k], strand, rupture, dt, modulus, lc)
+            if damage[k] >= SNAPPED:
+                broken[k] = True                   # the strand has snapped: no pull from the next step
+                stored[k] = 0.0
+            pull *= 1.0 - damage[k]
         elif Qe >= Z[k] or Q >= 1e300:
             broken[k] = True                       # keep this step's pull, decay from the next
             for a in range(8):

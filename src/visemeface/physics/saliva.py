@@ -45,6 +45,13 @@ Two choices the seed leaves open, made here and documented:
   mouth, not one face-mesh element at a time.
 * **Glue per element.** ``K_glue`` is an array over the slabs
   (:mod:`visemeface.physics.glue`).
+* **Cohesive release (optional, issue 16).** Instead of the seed's brittle break and
+  per-step decay, the pull past Z can follow a bilinear traction-separation law
+  (``strand``: a softening tail in metres) and reach it over a ``rupture_time``
+  (saliva strands thin before they snap), the damage D a state of each slab. The
+  brittle law releases a slab in ~1 ms and the opened lips lever the rest of the
+  seam open in one frame; with a rupture time the failure front runs from the most
+  stretched place over a time set by τ.
 
 The rule runs once, compiled (:func:`_film_step`); a plain-numpy reference
 lives in the tests (``tests/physics/film_reference.py``).
@@ -67,6 +74,13 @@ EVAPORATION_RATE = 0.0
 FORCE_DECAY = 0.99
 #: The real saliva film's thickness between the lips, 0.07-0.1 mm (seed 000 §3.4.2, citing [CD87]).
 FILM_THICKNESS = 1e-4
+#: A rupture time (s) for the saliva drawn between parting lips (:attr:`SalivaParams.rupture_time`,
+#: not the default): a strand of saliva does not snap, it thins by capillarity against its
+#: viscoelasticity and breaks after a few extensional relaxation times, of order 10-100 ms for
+#: human saliva (filament break-up). 30 ms is a value inside that range chosen (issue 16) so that
+#: the glue-0.08 zipper of the seed scenario takes about 0.3 s on the 1500-vertex face; the
+#: zipper's length scales with it (10 ms: about 0.13 s; 0: the seed's release, one frame).
+RUPTURE_TIME = 0.03
 
 #: Hex8 natural-coordinate signs of the nodes, order (−,−,−) (+,−,−) (+,+,−) (−,+,−), then z+.
 HEX_SIGNS = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
@@ -121,6 +135,20 @@ class SalivaParams:
         δ_flow / slab thickness.
     film_thickness : float
         h₀ (m), the real saliva film's thickness (seed 000 §3.4.2: 0.07–0.1 mm).
+    strand : float
+        0 (default): the seed's brittle film (breaks at Q = Z, its pull then decays).
+        > 0 (m): a cohesive (bilinear traction–separation) law: past Z the film is drawn
+        into strands whose pull falls linearly to zero over this further separation of the
+        lips, then it breaks (:func:`visemeface.physics.film._cohesive_damage`). Its fracture
+        energy G_c = ½ σ_p (δ_p + strand) grows with the glue (σ_p, the pull at Z) and is
+        zero without glue, so glue 0 stays the elastic lips.
+    rupture_time : float
+        τ (s, e.g. :data:`RUPTURE_TIME`). > 0: the cohesive damage relaxes toward the
+        law's value, dD/dt = (D_law − D)/τ, and the film never pulls harder than at its
+        breaking point (a saliva strand thins and snaps over its break-up time, not at
+        once); with ``strand`` 0 the film lets go over τ after its breaking point, its pull
+        following the lips (the seed's ``decay`` is then unused). 0 with ``strand`` 0: the
+        seed's brittle film (its pull frozen at the break and decayed by ``decay`` a step).
     """
 
     initial_moisture: float = INITIAL_MOISTURE
@@ -132,6 +160,8 @@ class SalivaParams:
     soften: float = 0.0
     viscosity: float = float("inf")
     film_thickness: float = FILM_THICKNESS
+    strand: float = 0.0
+    rupture_time: float = 0.0
 
     @property
     def fluidity(self) -> float:
@@ -149,6 +179,10 @@ class SalivaParams:
             raise InputError(f"softening stretch must be >= 0, got {self.soften}")
         if not (self.viscosity > 0):
             raise InputError(f"saliva viscosity must be > 0 Pa·s, got {self.viscosity}")
+        if not (np.isfinite(self.strand) and self.strand >= 0):
+            raise InputError(f"saliva strand length must be >= 0 m, got {self.strand}")
+        if not (np.isfinite(self.rupture_time) and self.rupture_time >= 0):
+            raise InputError(f"saliva rupture time must be >= 0 s, got {self.rupture_time}")
         if not (np.isfinite(self.film_thickness) and self.film_thickness > 0):
             raise InputError(f"saliva film thickness must be > 0 m, got {self.film_thickness}")
         if not 0.0 <= self.decay < 1.0:

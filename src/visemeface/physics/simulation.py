@@ -42,7 +42,10 @@ class PhysicsSettings:
     it; ``glue_file`` a CSV (:func:`visemeface.physics.glue.read_glue_file`).
     ``posture_hz`` (0 = off) adds the stabiliser m (2π f)² (U(t) − u) on every
     free node alike; ``off`` names force terms to switch off (:data:`TERMS`).
-    ``film_elements``: least saliva slabs across the mouth. ``lip_bone``: the lips'
+    ``film_elements``: least saliva slabs across the mouth; ``film_corners``: the film runs on
+    into the mouth corners, where the lips meet (:attr:`FEMFace.corner_hexes`; off, the default,
+    it ends at the last seam pair and that free end, a notch tip, carries 1.2-1.3x the centre's
+    stretch and lets go first; on, the centre carries the most and the ends the least). ``lip_bone``: the lips'
     deep (bone-side) layer, their orbicularis, is moved along the muscle field like
     the jaw's bone (``muscle``, default) or ``free``. Free, the upper lip follows the
     glued lower one down at the centre and the seam tears at the corners first
@@ -64,6 +67,7 @@ class PhysicsSettings:
     posture_hz: float = 0.0
     off: tuple = ()
     film_elements: int = FILM_ELEMENTS
+    film_corners: bool = False
     lip_bone: str = "muscle"
     muscles: str = "active"
     field_smoothing: int = 0
@@ -183,8 +187,12 @@ class StickySimulation:
                 return glue_per_element(s, settings.glue, settings.glue_profile, settings.glue_file)
         mesh = fem.mesh
         per_layer = len(fem.seam_pairs) - 1
-        self.film = SalivaFilm(mesh.nodes, mesh.hexes[fem.saliva], fem.seam_s[fem.saliva_pairs], glue,
-                               settings.saliva, across=per_layer, min_elements=settings.film_elements)
+        hexes, ends = mesh.hexes[fem.saliva], fem.seam_s[fem.saliva_pairs]
+        if settings.film_corners and fem.corner_hexes is not None and len(fem.corner_hexes):
+            hexes, ends = np.concatenate([hexes, fem.corner_hexes]), np.concatenate([ends, fem.corner_s])
+            per_layer += len(fem.corner_hexes) // max(len(fem.saliva) // max(per_layer, 1), 1)
+        self.film = SalivaFilm(mesh.nodes, hexes, ends, glue, settings.saliva, across=per_layer,
+                               min_elements=settings.film_elements)
         from visemeface.physics.hexmesh import HexMesh
         from visemeface.physics.materials import SOFT_TISSUE
         from visemeface.physics.tled import TLEDSolver
@@ -275,7 +283,7 @@ class StickySimulation:
             h.update(np.ascontiguousarray(arr).tobytes())
         s = self.settings
         h.update(repr((self.physics, self.fps, self.dt, s.damping, s.hourglass_kappa, s.saliva, s.posture_hz,
-                       tuple(s.off), s.film_elements, s.lip_bone, s.muscles, s.field_smoothing, s.min_jacobian)).encode())
+                       tuple(s.off), s.film_elements, s.film_corners, s.lip_bone, s.muscles, s.field_smoothing, s.min_jacobian)).encode())
         return h.hexdigest()[:16]
 
 

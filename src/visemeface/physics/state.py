@@ -16,7 +16,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 #: The film's state arrays (:meth:`SalivaFilm.initial_state`) and their dtypes.
-SALIVA_KEYS = {"broken": np.bool_, "dry": np.bool_, "stored": np.float64, "stretch": np.float64, "flow": np.float64}
+SALIVA_KEYS = {"broken": np.bool_, "dry": np.bool_, "stored": np.float64, "stretch": np.float64, "flow": np.float64,
+               "damage": np.float64}
 
 
 @dataclass
@@ -30,7 +31,7 @@ class SimState:
     step : int
     dt : float
     saliva : dict of arrays
-        ``broken``, ``dry``, ``stored`` (E, 8, 3), ``stretch``, ``flow`` per film slab.
+        ``broken``, ``dry``, ``stored`` (E, 8, 3), ``stretch``, ``flow``, ``damage`` per film slab.
     """
 
     u: np.ndarray
@@ -63,5 +64,7 @@ class SimState:
         saliva = {k: np.array(d[f"saliva_{k}"], dtype=t) for k, t in SALIVA_KEYS.items() if f"saliva_{k}" in d}
         if "stretch" in saliva and "flow" not in saliva:      # a checkpoint from before the film could flow
             saliva["flow"] = np.zeros_like(saliva["stretch"])
+        if "stretch" in saliva and "damage" not in saliva:    # ... or soften by the cohesive law
+            saliva["damage"] = np.zeros_like(saliva["stretch"])
         return cls(np.array(d["u"], dtype=np.float64), np.array(d["u_prev"], dtype=np.float64),
                    int(d["step"]), float(d["dt"]), saliva)

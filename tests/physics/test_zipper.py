@@ -1,0 +1,118 @@
+"""The zipper of a cohesive saliva film carried into the mouth corners (issue 16), on the coarse face.
+
+With the film ending at the last seam pair (a free end next to the unglued corner: a notch
+tip, 1.2x the centre's stretch) and the seed's brittle release (its pull gone in ~1 ms), the
+glued seam gives way in one cascade. Carried into the corners, the film is stretched most at
+the centre; with a rupture time (saliva strands thin before they snap) the failure front starts
+there and runs out to the corners while the jaw is held.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from visemeface.physics import drive
+from visemeface.physics.saliva import RUPTURE_TIME, SalivaParams
+
+FPS = 60.0
+
+
+@pytest.fixture(scope="module")
+def runs():
+    from visemeface.face.procedural import default_face
+    from visemeface.muscles.rig import MuscleRig
+    from visemeface.physics.face_model import build_fem_face
+    from visemeface.runtime import set_threads
+    set_threads(1)
+    face = default_face(resolution=1500)
+    fem, rig = build_fem_face(face), MuscleRig.from_file(face)
+    # seed 000/001's opening (scenario open-once: jaw to 0.35 from 0.05 s to 0.40 s), held 0.75 s
+    track = drive.ramp_track(rig.names, FPS, 0.05, 0.35, 0.75, 0.35)
+    settings = drive.PhysicsSettings(film_corners=True, saliva=SalivaParams(rupture_time=RUPTURE_TIME))
+    out = {}
+    for physics in ("sticky", "elastic"):
+        sim = drive.StickySimulation(fem, rig, track, physics=physics, settings=settings)
+        frames = [(fr.vertices, fr.saliva["film_open_span"], sim.film.front_gaps(fr.displacement) - sim.film.rest_gap)
+                  for fr in sim.frames()]
+        out[physics] = (sim, frames)
+    return fem, out
+
+
+@pytest.mark.slow
+def test_cohesive_film_unzips_from_the_centre_over_a_third_of_a_second(runs):
+    fem, out = runs
+    sim, frames = out["sticky"]
+    spans = np.array([f[1] for f in frames])
+    k0 = int(np.flatnonzero(spans > 0)[0])
+    k_full = int(np.flatnonzero(spans >= 0.95 * spans.max())[0])
+    assert abs(sim.film.s[np.argmax(frames[k0][2])]) < 0.15           # first opening at the centre
+    assert len(np.unique(np.round(spans[k0:k_full + 1], 4))) >= 8      # the open span grows in many steps
+    assert (k_full - k0) / FPS >= 0.2                                  # ... over at least 0.2 s
+    assert np.all(np.diff(spans[k0:k_full + 1]) >= 0)                 # and never closes on the way
+    esim, eframes = out["elastic"]
+    es = np.array([f[1] for f in eframes])
+    e0 = int(np.flatnonzero(es > 0)[0])
+    assert e0 < k0 and es[e0 + 2] >= 0.8 * es.max()                    # elastic: earlier, most of it in 2 frames
+    lips = np.unique(np.concatenate([fem.face.region("upper_lip"), fem.face.region("lower_lip")]))
+    d = frames[-1][0][lips] - eframes[-1][0][lips]
+    assert np.sqrt(np.mean(np.sum(d * d, axis=1))) <= 0.01 * fem.mouth_width   # the same open mouth at the end
+
+
+def test_the_film_runs_into_the_mouth_corners_where_the_lips_share_a_node():
+    from visemeface.face.procedural import default_face
+    from visemeface.physics.face_model import build_fem_face
+    from visemeface.physics.film import SalivaFilm
+    fem = build_fem_face(default_face(resolution=1500))
+    wedges = fem.corner_hexes
+    assert wedges.shape == (2, 8) and np.allclose(np.abs(fem.corner_s).max(axis=1), 1.0)
+    right, left = wedges                                        # node order: ξ along the seam, η lower -> upper
+    assert right[0] == right[3] and right[4] == right[7]        # the right corner: its ξ- face is one edge
+    assert left[1] == left[2] and left[5] == left[6]
+    hexes = np.concatenate([fem.mesh.hexes[fem.saliva], wedges])
+    ends = np.concatenate([fem.seam_s[fem.saliva_pairs], fem.corner_s])
+    film = SalivaFilm(fem.mesh.nodes, hexes, ends, lambda s: np.full(len(s), 0.08), across=len(hexes))
+    assert film.n_elements >= 48 and film.s.min() < -0.95 and film.s.max() > 0.95
+    assert (film.thickness > 0).all() and (film.volumes > 0).all()
+    # the lips meet at the corner: the film's rest gap closes toward it
+    corner = np.abs(film.s) > 0.9
+    assert film.rest_gap[corner].max() < film.rest_gap[~corner].min()
+
+
+def _held(params, lam, steps, glue=0.08):
+    from test_sticky import _box, _films, _step, _stretched
+    film, X, st = _films(glue, params)
+    F = _stretched(_box(), lam)[0]
+    forces = [np.abs(_step(film, X, st, F, 1e-5 * i)[0]).max() for i in range(steps)]
+    return film, st, np.array(forces)
+
+
+def test_a_strand_lets_go_over_its_rupture_time_and_never_pulls_past_its_peak():
+    tau, dt = 1e-3, 1e-5
+    lam = np.sqrt(1.12)                                          # past the breaking point Z = 1.08
+    _, st, f = _held(SalivaParams(rupture_time=tau), lam, 800)     # 8 tau: snapped at D = 0.999
+    _, _, peak = _held(SalivaParams(rupture_time=tau), np.sqrt(1.08) - 1e-9, 1)
+    assert f.max() <= peak[0] * (1 + 1e-6)                      # capped at the pull at Z
+    # the law's damage is 1 (strand 0: past the peak it has to go), reached at rate 1/tau
+    k = int(tau / dt)
+    assert f[k] == pytest.approx(f[0] * np.exp(-1.0), rel=0.02)
+    assert st["broken"][0] and st["damage"][0] >= 0.999
+    # without glue there is no peak: the film lets go at once, as the seed's elastic lips
+    _, st0, f0 = _held(SalivaParams(rupture_time=tau), 1.01, 2, glue=0.0)
+    assert st0["broken"][0] and f0.max() == 0.0
+
+
+def test_a_strand_softens_linearly_with_the_separation_and_its_energy_is_its_length():
+    # bilinear law: at half the strand past the peak separation, half the peak traction
+    from test_sticky import _box, _films, _step, _stretched
+    strand = 2e-4
+    film, X, st = _films(0.08, SalivaParams(strand=strand))
+    h = film.thickness[0]
+    xp = np.sqrt(1.08)
+    f_peak = np.abs(_step(film, X, st, _stretched(_box(), xp - 1e-9)[0])[0]).max()
+    x_half = xp + 0.5 * strand / h
+    f_half = np.abs(_step(film, X, st, _stretched(_box(), x_half)[0], 1e-5)[0]).max()
+    assert f_half == pytest.approx(0.5 * f_peak, rel=1e-6)      # the traction halved (nodal force ∝ dW/dλ)
+    assert 0.0 < st["damage"][0] < 1.0 and not st["broken"][0]
+    _step(film, X, st, _stretched(_box(), xp + 1.01 * strand / h)[0], 2e-5)
+    assert st["broken"][0]
