@@ -244,10 +244,12 @@ class StickySimulation:
                 "film_open_count": film["count"], "film_open_span": film["span"]}
 
     def initial_state(self) -> SimState:
-        """At rest in the first frame's posture (its equilibrium without glue): a track may start mid-gesture."""
-        u0 = self.drive.keyframe(0)[2] if np.any(self.values[0]) else None
-        state = self.integrator.start(u0)
-        state.saliva = self.film.initial_state(u0)
+        """At rest on the neutral face, the film intact; a track that starts mid-gesture moves there over its
+        first frames, the lips meeting the film's push on the way. (Starting in the first frame's posture,
+        its equilibrium without the film, put pressed lips 0.3 mm into a 1 mm film — Q = 0.09 on the
+        3 s example's silence — whose push inverted a lip element within 0.3 ms, at any step.)"""
+        state = self.integrator.start(None)
+        state.saliva = self.film.initial_state(None)
         return state
 
     def frames(self, start: dict | None = None):
