@@ -130,9 +130,10 @@ def build_model(fem, drive, film, settings: PhysicsSettings, dt: float):
     from visemeface.physics.tled import TLEDSolver
 
     mesh = fem.mesh
-    # The whole mesh (tissue and the saliva hexahedra the film refines) once, for the
-    # stable time step and the lumped masses; the tissue alone for the step's forces.
-    whole = TLEDSolver(mesh, [SOFT_TISSUE, SALIVA], dt=dt, damping=settings.damping,
+    # The whole mesh (tissue and the saliva hexahedra the film refines) once, for the lumped
+    # masses (the saliva hexahedra are no TLED elements: the film's stable step is in
+    # StickySimulation.stability); the tissue alone for the step's forces.
+    whole = TLEDSolver(mesh, [SOFT_TISSUE, SALIVA], dt=1e-12, damping=settings.damping,
                        hourglass_kappa=settings.hourglass_kappa)
     tissue_mesh = HexMesh(mesh.nodes, mesh.hexes[fem.tissue], material=np.zeros(len(fem.tissue), np.int64))
     tissue = TLEDSolver(tissue_mesh, SOFT_TISSUE, dt=dt, damping=settings.damping,
@@ -190,6 +191,10 @@ class StickySimulation:
         _check_settings(physics, settings)
         self.fem, self.rig, self.physics, self.settings = fem, rig, physics, settings
         self.values, self.fps = track_values(track, rig)
+        # The face starts at rest (initial_state), so its first frame is the neutral face: the muscles
+        # and the jaw move into the second frame's posture over the first frame, not in one step.
+        self.values = np.array(self.values, dtype=np.float64)
+        self.values[0] = 0.0
         if physics == "elastic":
             def glue(s):
                 return np.zeros(len(s))
@@ -244,8 +249,8 @@ class StickySimulation:
                 "film_open_count": film["count"], "film_open_span": film["span"]}
 
     def initial_state(self) -> SimState:
-        """At rest on the neutral face, the film intact; a track that starts mid-gesture moves there over its
-        first frames, the lips meeting the film's push on the way. (Starting in the first frame's posture,
+        """At rest on the neutral face, the film intact; a track that starts mid-gesture moves into its second
+        frame's posture over the first frame, the lips meeting the film's push on the way. (Starting in the first frame's posture,
         its equilibrium without the film, put pressed lips 0.3 mm into a 1 mm film — Q = 0.09 on the
         3 s example's silence — whose push inverted a lip element within 0.3 ms, at any step.)"""
         state = self.integrator.start(None)
