@@ -128,8 +128,9 @@ def test_the_stable_step_keeps_the_zipper_of_the_seed_step(coarse_face, film):
 
 @pytest.mark.slow
 def test_speech_that_starts_mid_gesture_runs_at_the_automatic_step():
-    """The 3 s example starts on a silence posture that presses the lips into the film (Q = 0.09):
-    started there, its push inverted a lip element within 0.3 ms at 1e-5 s as at the stable step."""
+    """The 3 s example starts on a silence posture that presses the lips into the film (Q = 0.09): with the
+    film formed there, its push inverted a lip element within 0.3 ms at 1e-5 s as at the stable step; it now
+    starts squeezed out where the lips are pressed."""
     from visemeface.face.procedural import default_face
     from visemeface.muscles.rig import MuscleRig
     from visemeface.physics import drive
@@ -146,6 +147,7 @@ def test_speech_that_starts_mid_gesture_runs_at_the_automatic_step():
                              load_visemes(rig=rig), fps=30, ranges=ranges).iloc[:10]
     assert track.iloc[0].abs().max() > 0.1                                 # it does start mid-gesture
     sim = drive.StickySimulation(build_fem_face(face), rig, track)
+    assert sim.initial_state().saliva["dry"].any()
     frames = list(sim.frames())
     assert len(frames) == 10 and sim.dt > 3e-5
     assert np.isfinite(frames[-1].vertices).all()

@@ -537,21 +537,18 @@ def test_simulate_track_yields_renderable_frames_at_the_track_rate(model):
 
 
 @pytest.mark.slow
-def test_a_track_that_starts_mid_gesture_starts_at_rest_and_moves_into_that_posture(model):
-    # Started in the first posture (its equilibrium without the film), pressed lips met the film's full push
-    # at once and a lip element inverted within 0.3 ms, at any step; now frame 0 is the rest face it starts
-    # from and the muscles and jaw move into the track over the first frame.
+def test_a_track_that_starts_mid_gesture_starts_in_that_posture(model):
     fem, rig = model
-    t = np.arange(21) / 100.0
-    a = {"jaw": np.full(21, 0.2), "risorius_left": np.full(21, 0.5), "risorius_right": np.full(21, 0.5)}
+    t = np.arange(6) / 100.0
+    a = {"jaw": np.full(6, 0.2), "risorius_left": np.full(6, 0.5), "risorius_right": np.full(6, 0.5)}
     track = drive.make_track(t, a, rig.names, 100.0)
     sim = drive.StickySimulation(fem, rig, track, physics="elastic")
     frames = list(sim.frames())
-    assert np.abs(frames[0].vertices - fem.face.vertices).max() == 0.0
-    kin = rig.pose(sim.values[-1]) - rig.face.vertices
-    got = frames[-1].vertices - fem.face.vertices
-    assert np.abs(got - kin)[fem.surface_vertices].max() < 0.02 * fem.mouth_width
-    assert np.abs(frames[-1].velocity).max() < 0.01          # settled in the posture by 0.2 s
+    kin = rig.pose(sim.values[0]) - rig.face.vertices
+    for fr in (frames[0], frames[-1]):
+        got = fr.vertices - fem.face.vertices
+        assert np.abs(got - kin)[fem.surface_vertices].max() < 0.02 * fem.mouth_width
+    assert np.abs(frames[-1].velocity).max() < 0.01          # at rest, not thrown from the rest face
 
 
 def test_untangle_lifts_crushed_target_elements_and_keeps_the_rest(model):

@@ -191,10 +191,6 @@ class StickySimulation:
         _check_settings(physics, settings)
         self.fem, self.rig, self.physics, self.settings = fem, rig, physics, settings
         self.values, self.fps = track_values(track, rig)
-        # The face starts at rest (initial_state), so its first frame is the neutral face: the muscles
-        # and the jaw move into the second frame's posture over the first frame, not in one step.
-        self.values = np.array(self.values, dtype=np.float64)
-        self.values[0] = 0.0
         if physics == "elastic":
             def glue(s):
                 return np.zeros(len(s))
@@ -249,12 +245,11 @@ class StickySimulation:
                 "film_open_count": film["count"], "film_open_span": film["span"]}
 
     def initial_state(self) -> SimState:
-        """At rest on the neutral face, the film intact; a track that starts mid-gesture moves into its second
-        frame's posture over the first frame, the lips meeting the film's push on the way. (Starting in the first frame's posture,
-        its equilibrium without the film, put pressed lips 0.3 mm into a 1 mm film — Q = 0.09 on the
-        3 s example's silence — whose push inverted a lip element within 0.3 ms, at any step.)"""
-        state = self.integrator.start(None)
-        state.saliva = self.film.initial_state(None)
+        """At rest in the first frame's posture (its equilibrium without glue): a track may start mid-gesture.
+        Where that posture presses the lips together the film starts squeezed out (:meth:`SalivaFilm.initial_state`)."""
+        u0 = self.drive.keyframe(0)[2] if np.any(self.values[0]) else None
+        state = self.integrator.start(u0)
+        state.saliva = self.film.initial_state(u0)
         return state
 
     def frames(self, start: dict | None = None):
