@@ -128,7 +128,7 @@ def _pad(text: str):
 
 def run(args) -> int:
     import contextlib
-    import sys
+    import warnings
     from pathlib import Path
 
     import cv2
@@ -207,11 +207,11 @@ def run(args) -> int:
     mouth_px = box.w if boxes is None else boxes[0].mouth_width
     lost = [] if boxes is None else [i for i, b in enumerate(boxes) if not b.found]
     if lost:
-        print(f"visemeface: warning: no face in {len(lost)} of {n} frames ({_ranges(lost)}): their box is "
-              "taken from the nearest frames with a face and their openings are likely 0", file=sys.stderr)
+        warnings.warn(f"no face in {len(lost)} of {n} frames ({_ranges(lost)}): their box is "
+                      "taken from the nearest frames with a face and their openings are likely 0")
     if mouth_px < MIN_MOUTH_PX:
-        print(f"visemeface: warning: the mouth is only {mouth_px} px wide (under {MIN_MOUTH_PX}): thin openings "
-              "may be missed; use a larger video or crop", file=sys.stderr)
+        warnings.warn(f"the mouth is only {mouth_px} px wide (under {MIN_MOUTH_PX}): thin openings "
+                      "may be missed; use a larger video or crop")
     msg = (f"{n} frames at {source.fps:g} fps, {width}, method {args.method}: openings max {int(df['count'].max())}, "
            f"{multi} frame(s) with 2 or more; max width {df['width'].max():.3f} w, "
            f"max area {df['area'].max():.4f} w^2")
