@@ -130,7 +130,7 @@ def face_stable_step(mesh, tissue, film, *, hourglass_kappa: float) -> dict:
     whole = TLEDSolver(mesh, [SOFT_TISSUE, SALIVA], dt=1e-12, hourglass_kappa=hourglass_kappa)
     is_tissue = np.zeros(mesh.n_elements, bool)
     is_tissue[np.asarray(tissue, dtype=np.int64)] = True
-    dt_e = whole.characteristic_length / np.where(is_tissue, SOFT_TISSUE.wave_speed, SALIVA.wave_speed)
+    dt_e = whole.element_dt
     element = {"tissue": float(dt_e[is_tissue].min()),
                "saliva": float(dt_e[~is_tissue].min()) if (~is_tissue).any() else float("inf")}
     tmesh = HexMesh(mesh.nodes, mesh.hexes[is_tissue], material=np.zeros(int(is_tissue.sum()), np.int64))

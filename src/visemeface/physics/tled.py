@@ -589,7 +589,8 @@ class TLEDSolver:
 
         # Stability: dt_e = L_e / c_e, L_e = 1 / sqrt(2 (1 + κ) a_e).
         self.characteristic_length = 1.0 / np.sqrt(2.0 * (1.0 + self.kappa) * a)
-        dt_e = self.characteristic_length / mat["wave_speed"]
+        #: Each element's own stable step L_e / c_e (s).
+        self.element_dt = dt_e = self.characteristic_length / mat["wave_speed"]
         self.critical_element = int(np.argmin(dt_e))
         self.stable_dt = float(dt_e[self.critical_element])
         if not (np.isfinite(dt) and dt > 0):
