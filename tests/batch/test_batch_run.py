@@ -56,6 +56,7 @@ def _check_clip(folder):
     return record
 
 
+@pytest.mark.slow
 def test_bad_rows_are_one_line_each_and_the_good_clips_finish(client, tmp_path):
     bad = ("gone,missing.txt,,,video\n"                # a transcript that is not there
            "emo,,lay red,hapiness=0.3,video\n"         # unknown emotion
@@ -75,6 +76,7 @@ def test_bad_rows_are_one_line_each_and_the_good_clips_finish(client, tmp_path):
     assert sorted(p.name for p in out.iterdir()) == ["batch_report.csv", "c0", "c1", "c2"]
 
 
+@pytest.mark.slow
 def test_a_clip_failing_on_the_worker_is_reported_and_the_others_finish(client, tmp_path):
     (tmp_path / "bad.txt").write_text("0.0 0.5 aa\n0.5 0.7 zz\n")     # read by the worker: no phone zz
     path = tmp_path / "jobs.csv"
@@ -85,6 +87,7 @@ def test_a_clip_failing_on_the_worker_is_reported_and_the_others_finish(client, 
     assert not (tmp_path / "out" / "broken").exists()
 
 
+@pytest.mark.slow
 def test_resume_after_an_interrupted_batch_does_only_the_missing_clips(client, tmp_path):
     jobs = _jobs(tmp_path, 8)
     out = tmp_path / "out"
@@ -129,6 +132,7 @@ def test_a_clip_made_with_other_settings_is_not_skipped_silently(client, tmp_pat
     assert rows[0]["status"] == "done" and _check_clip(out / "c0")["settings"]["fps"] == 10
 
 
+@pytest.mark.slow
 def test_cli_on_a_running_scheduler_reports_each_bad_clip_on_one_line(client, tmp_path, monkeypatch, capsys):
     from visemeface.cli import main
 

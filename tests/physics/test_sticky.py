@@ -386,6 +386,7 @@ def test_same_equilibrium_with_and_without_glue_once_open_wide(model, opened):
     assert rms_kin <= 0.05
 
 
+@pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason="issue 16 open with the default (seed's) film: its free ends by the unglued "
                    "corner slit carry 1.2-1.3x the centre's stretch and its brittle release cascades over the seam in one "
                    "frame; film_corners + a rupture time unzip the coarse face from the centre (test_zipper.py) but are "
