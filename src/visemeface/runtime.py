@@ -12,11 +12,24 @@ behaviour call it themselves. What it sets, and why:
   (numba issue #5983). GNU OpenMP's pool has no fork handler that blocks the
   parent, and our children (ffmpeg) ``exec`` at once. A layer the user chose
   (``NUMBA_THREADING_LAYER``) is kept.
-- **GNU OpenMP spin** ``GOMP_SPINCOUNT=1000`` unless set: by default every
-  barrier spins ~300,000 times; on a machine shared with other busy processes
-  a spinning or pre-empted worker then stalls both parallel regions of each
-  step (measured on a loaded 2-core box: 12 ms/step with the default, 0.6–0.7 ms
-  with a short spin). It only matters before libgomp is first loaded.
+- **GNU OpenMP spin** ``GOMP_SPINCOUNT=10000`` unless set: how long numba's
+  worker thread spins at the end of a parallel loop before it sleeps. Each
+  step of the FEM face is one compiled call with two parallel loops and about
+  0.1 ms of Python around it; a worker that fell asleep in that gap is woken
+  for the next step, which on this 2-core virtual machine cost more than the
+  second thread gained. Sticky face, 2 threads, idle machine (issue 17): 435 µs
+  a step at 1000, 305 µs at 10,000, 290 µs at 30,000 and 100,000; 1 thread
+  345 µs. The default (300,000) is worse under load: with another busy process
+  on the 2 cores a spinning worker holds the core the main thread needs (12 ms a
+  step measured then; at 10,000 it was 0.9 ms against 0.49 ms at 1000, and one
+  thread, 0.42 ms, is then the better choice: ``--threads 1``). It only matters
+  before libgomp is first loaded.
+- **BLAS threads: 1** (threadpoolctl). numpy's OpenBLAS pool spins for a while
+  after each call; the few matrix products of a run (rig poses, fits, element
+  geometry) then left OpenBLAS threads spinning on the core numba's worker
+  needs: the sticky face's step took 627 µs on 2 threads against 367 µs with
+  the BLAS pool at one thread. The BLAS products here are small, so one
+  thread costs them little.
 - **numba's cache folder**: numba caches compiled kernels beside the package
   and falls back to ``~/.cache/numba`` when that is read-only; where both are
   read-only (a system install with no home) a folder under the temporary
@@ -36,7 +49,7 @@ from visemeface.errors import InputError
 #: Threading layers in order of preference (see the module docstring).
 THREADING_LAYERS = ("omp", "workqueue")
 #: Barrier spin of GNU OpenMP (see the module docstring).
-GOMP_SPINCOUNT = "1000"
+GOMP_SPINCOUNT = "10000"
 
 
 def _writable_cache_dir() -> str | None:
@@ -100,9 +113,19 @@ def configure(threads: int | None = None, environ=None) -> dict:
         config.THREADING_LAYER = env["NUMBA_THREADING_LAYER"]
         if env.get("NUMBA_CACHE_DIR"):
             config.CACHE_DIR = env["NUMBA_CACHE_DIR"]
+    if environ is None:
+        limit_blas_threads(1)
     n = set_threads(threads) if threads is not None else None
     return {"threading_layer": env["NUMBA_THREADING_LAYER"], "threads": n,
             "cache_dir": env.get("NUMBA_CACHE_DIR")}
+
+
+def limit_blas_threads(n: int = 1) -> None:
+    """Cap the BLAS libraries loaded in this process (numpy's OpenBLAS) at ``n`` threads (module docstring)."""
+    import numpy  # noqa: F401  (loads its BLAS, so there is a pool to cap)
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(limits=int(n), user_api="blas")
 
 
 def set_threads(n: int | None) -> int:

@@ -576,6 +576,43 @@ def test_untangle_lifts_crushed_target_elements_and_keeps_the_rest(model):
     np.testing.assert_array_equal(fixed[far], bad[far])       # a local repair
 
 
+def test_a_step_is_its_parts_bit_for_bit(model):
+    # The integrator's step (the terms' R first, then the tissue and the update in one compiled call, the
+    # natural shape and the drag updated in place) against its parts, done the plain numpy way.
+    from visemeface.physics import tled
+    fem, rig = model
+    track = _ramp(rig, fps=100, start=0.0, hold=0.0)
+    sim = drive.StickySimulation(fem, rig, track)
+    integ, mdl = sim.integrator, sim.model
+    tissue, s, dt = mdl.terms["tissue"], mdl.tissue_solver, mdl.dt
+    state = sim.initial_state()
+    n = int(0.025 / dt)
+    integ.advance(state, n - n % tissue.refresh + 3)       # mid-ramp, between refreshes and frames
+    ref = state.copy()
+    integ.step(state)
+
+    t = ref.step * dt
+    s0 = ref.step - ref.step % tissue.refresh              # the natural shape as of the last refresh
+    f = s0 * dt * sim.fps
+    i = int(f + 1e-9)
+    w = min(max(f - i, 0.0), 1.0)
+    geo = [(y - x) * w + x for x, y in zip(tissue.geometry(i), tissue.geometry(i + 1))]
+    uY = ref.u - mdl.terms["tissue"].drive.target(t)
+    fe, jac = np.zeros_like(s._fe), np.zeros_like(s._jac)
+    tled._element_forces_np(uY, s.conn, *geo, s.mu, s.K, fe, jac, s._fdef, False, np.zeros_like(jac), False)
+    R = np.zeros_like(ref.u)
+    mdl.terms["saliva"].add(ref, t, R)
+    R += mdl.terms["drag"].alpha_m * mdl.terms["drag"].drive.target_velocity(t)
+    F = np.zeros_like(ref.u)
+    np.add.at(F, s.conn.ravel(), fe.reshape(-1, 3))
+    new = integ._A * (R - F) + integ._B * ref.u + integ._C * ref.u_prev
+    new[mdl.jaw_nodes] = mdl.jaw((ref.step + 1) * dt)
+    scale = np.abs(state.u).max()
+    assert scale > 0 and np.abs(state.u - new).max() < 1e-12 * scale
+    assert np.array_equal(state.u_prev, ref.u) and state.step == ref.step + 1
+    assert all(np.array_equal(state.saliva[k], ref.saliva[k]) for k in ref.saliva)
+
+
 def test_no_force_term_knows_the_seam_and_terms_switch_off(model):
     # Free lips: tissue (the muscles as its active strain), saliva and drag; no dead loads,
     # no spring toward the rig's posture unless asked for, and then the same per unit mass everywhere.

@@ -217,6 +217,12 @@ class FaceDrive:
         """External nodal forces at time ``t``, linear between frames."""
         return self._lerp("force", t)
 
+    def target_segment(self, t: float):
+        """(U at frame i, its change to frame i + 1, weight w) at time ``t``: U(t) = U_i + w ΔU."""
+        w = self._interval(t)
+        a, d, _ = self._seg["target"]
+        return a, d, w
+
     def target(self, t: float) -> np.ndarray:
         """The kinematic field U (n, 3) at time ``t``, linear between frames."""
         return self._lerp("target", t)

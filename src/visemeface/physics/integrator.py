@@ -84,6 +84,7 @@ class CentralDifference:
         self._A, self._B, self._C = (np.ascontiguousarray(x[:, None] * model.free) for x in (A, B, C))
         s = model.tissue_solver
         self._kernel = tled._integrate_nb if s.parallel else tled._integrate_serial
+        self._step = tled._step_nb if s.parallel else tled._step_serial
         self._R = np.zeros((model.n_nodes, 3))
         self._new = np.zeros((model.n_nodes, 3))
 
@@ -96,17 +97,29 @@ class CentralDifference:
         return SimState(u, u.copy(), 0, self.model.dt, dict(saliva or {}))
 
     def step(self, state: SimState) -> None:
-        """Advance ``state`` by one step in place."""
+        """Advance ``state`` by one step in place.
+
+        R(u, t) first (no term reads the tissue's forces), then the tissue's element forces and the
+        update in one compiled call (:func:`~visemeface.physics.tled._step_nb`), then the divergence
+        check on that call's smallest J and the jaw.
+        """
         model, dt = self.model, self.model.dt
         t = state.step * dt
         tissue = model.terms["tissue"]
-        tissue.element_forces(state.u, t, state.step)
-        model.tissue_solver._check(state.step, t)
-        R = model.external(state, t, self._R)
         s = model.tissue_solver
+        R = model.external(state, t, self._R)
         new = self._new
-        self._kernel(s._fe.reshape(-1, 3), s._ptr, s._slot, R, self._A, self._B, self._C, state.u,
-                     state.u_prev, new)
+        if tissue.enabled:
+            ue, dhdx, vol, gamma, hgk = tissue.inputs(state.u, t, state.step)
+            jmin = self._step(ue, s.conn, dhdx, vol, gamma, hgk, s.mu, s.K, s._fe, s._jac, s._fdef, s._energy,
+                              False, s._ptr, s._slot, R, self._A, self._B, self._C, state.u, state.u_prev, new)
+            if not jmin > 0.0:
+                s._check(state.step, t)
+        else:
+            tissue.element_forces(state.u, t, state.step)
+            s._check(state.step, t)
+            self._kernel(s._fe.reshape(-1, 3), s._ptr, s._slot, R, self._A, self._B, self._C, state.u,
+                         state.u_prev, new)
         model.impose(new, (state.step + 1) * dt)
         # rotate the buffers: u_prev <- u <- new, the old u_prev becomes the next scratch
         self._new = state.u_prev

@@ -54,12 +54,22 @@ class Tissue(Term):
         super().__init__(enabled)
         self.solver = solver
 
+    def inputs(self, u, t: float = 0.0, step: int = 0) -> tuple:
+        """What the element kernel reads at this step: (the displacement the elements see, ∂h/∂x, V, γ,
+        hourglass stiffness); here ``u`` and the rest geometry."""
+        s = self.solver
+        return u, s.dhdx, s.force_volume, s.gamma, s.hourglass_stiffness
+
     def element_forces(self, u, t: float = 0.0, step: int = 0) -> None:
         """Fill ``solver._fe`` (zeros when switched off) and ``solver._jac`` for ``u``."""
         s = self.solver
-        s._element_forces(u, False)
         if not self.enabled:
+            s._element_forces(u, False)
             s._fe[:] = 0.0
+            return
+        ue, dhdx, vol, gamma, hgk = self.inputs(u, t, step)
+        s._elem_kernel(ue, s.conn, dhdx, vol, gamma, hgk, s.mu, s.K, s._fe, s._jac, s._fdef, False,
+                       s._energy, False)
 
 
 class ActiveTissue(Tissue):
@@ -92,7 +102,7 @@ class ActiveTissue(Tissue):
         self._nodes = s.mesh.nodes
         self._lam2mu = s.K + 4.0 * s.mu / 3.0
         self._cur = None
-        self._uY = np.zeros_like(s.mesh.nodes)
+        self._uY = np.zeros(s.mesh.nodes.shape)
 
     def geometry(self, k: int):
         """(∂h/∂Y, V_Y, γ_Y, hourglass stiffness) of the muscle field's shape at track frame ``k``."""
@@ -107,7 +117,7 @@ class ActiveTissue(Tissue):
             gamma = hourglass_shape_vectors(Y, conn, dhdx)
             a = np.einsum("eai,eai->e", dhdx, dhdx)
             hgk = self.solver.kappa * vol * self._lam2mu * a / 8.0
-            self._geo[k] = (dhdx, vol, gamma, hgk)
+            self._geo[k] = tuple(np.ascontiguousarray(x) for x in (dhdx, vol, gamma, hgk))
         return self._geo[k]
 
     def _refresh(self, step: int, t: float) -> None:
@@ -119,24 +129,17 @@ class ActiveTissue(Tissue):
         w = min(max(f - i, 0.0), 1.0)
         a, b = self.geometry(i), self.geometry(i + 1)
         if self._cur is None:
-            self._buf = tuple(np.empty_like(x) for x in a)
+            self._buf = tuple(np.empty(x.shape) for x in a)   # C order: reshape(-1) below is a view
         for out, x, y in zip(self._buf, a, b):      # out = x + w (y - x), in place: no allocation a refresh
-            np.subtract(y, x, out=out)
-            out *= w
-            out += x
+            _lerp_into(x.ravel(), y.ravel(), w, out.reshape(-1))
         self._cur = (s0, self._buf)
 
-    def element_forces(self, u, t: float = 0.0, step: int = 0) -> None:
-        s = self.solver
-        if not self.enabled:
-            s._element_forces(u, False)
-            s._fe[:] = 0.0
-            return
+    def inputs(self, u, t: float = 0.0, step: int = 0) -> tuple:
+        """u − U(t) and the natural shape's geometry (see the class docstring)."""
         self._refresh(step, t)
-        dhdx, vol, gamma, hgk = self._cur[1]
-        np.subtract(u, self.drive.target(t), out=self._uY)
-        s._elem_kernel(self._uY, s.conn, dhdx, vol, gamma, hgk, s.mu, s.K, s._fe, s._jac, s._fdef, False,
-                       s._energy, False)
+        a, d, w = self.drive.target_segment(t)
+        _minus_lerp(u.ravel(), a.ravel(), d.ravel(), w, self._uY.reshape(-1))
+        return (self._uY,) + self._cur[1]
 
 
 class MuscleLoads(Term):
@@ -178,9 +181,13 @@ class Drag(Term):
         super().__init__(enabled)
         self.drive, self.alpha_m = drive, np.asarray(alpha_m, dtype=np.float64)
         self._buf = np.zeros((len(self.alpha_m), 3))
+        self._v = None
 
     def add(self, state, t, R):
-        np.multiply(self.alpha_m, self.drive.target_velocity(t), out=self._buf)
+        v = self.drive.target_velocity(t)
+        if v is not self._v:                      # constant over a track segment: multiplied once
+            np.multiply(self.alpha_m, v, out=self._buf)
+            self._v = v
         R += self._buf
 
 
@@ -198,3 +205,20 @@ class PostureSpring(Term):
         np.subtract(self.drive.target(t), state.u, out=self._buf)
         self._buf *= self.k
         R += self._buf
+
+
+from numba import njit  # noqa: E402
+
+
+@njit(cache=True, boundscheck=False)
+def _lerp_into(x, y, w, out):  # pragma: no cover - compiled
+    """out = (y − x) w + x over flat arrays, one pass (numpy took three)."""
+    for i in range(out.shape[0]):
+        out[i] = (y[i] - x[i]) * w + x[i]
+
+
+@njit(cache=True, boundscheck=False)
+def _minus_lerp(u, a, d, w, out):  # pragma: no cover - compiled
+    """out = u − (d w + a) over flat arrays: the displacement from the field U(t) = a + w d, one pass."""
+    for i in range(out.shape[0]):
+        out[i] = u[i] - (d[i] * w + a[i])
