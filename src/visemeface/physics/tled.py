@@ -80,6 +80,20 @@ DEFAULT_HOURGLASS_KAPPA = 0.075
 _GAUSS = NODE_SIGNS / np.sqrt(3.0)
 
 
+def _gauss_shape_derivatives() -> np.ndarray:
+    """∂N_a/∂ξ_k at the 2 × 2 × 2 Gauss points, (g, a, k)."""
+    s = NODE_SIGNS
+    out = []
+    for g in _GAUSS:
+        fac = 1.0 + s * g                                           # (8, 3)
+        out.append(np.stack([s[:, 0] * fac[:, 1] * fac[:, 2], s[:, 1] * fac[:, 0] * fac[:, 2],
+                             s[:, 2] * fac[:, 0] * fac[:, 1]], axis=1) / 8.0)
+    return np.array(out)
+
+
+_GAUSS_DN = _gauss_shape_derivatives()
+
+
 # ---------------------------------------------------------------------------
 # Precomputation (numpy, once)
 # ---------------------------------------------------------------------------
@@ -110,18 +124,12 @@ def element_geometry(nodes: np.ndarray, hexes: np.ndarray) -> tuple[np.ndarray, 
     volume : ndarray (e,)
     """
     x = np.asarray(nodes, dtype=np.float64)[np.asarray(hexes)]        # (e, 8, 3)
-    s = NODE_SIGNS
-    B = np.zeros_like(x)
-    V = np.zeros(len(x))
-    for g in _GAUSS:
-        fac = 1.0 + s * g                                           # (8, 3)
-        dN = np.stack([s[:, 0] * fac[:, 1] * fac[:, 2], s[:, 1] * fac[:, 0] * fac[:, 2],
-                       s[:, 2] * fac[:, 0] * fac[:, 1]], axis=1) / 8.0   # (8, 3) ∂N/∂ξ
-        cols = np.einsum("eai,ak->eki", x, dN)                      # (e, 3, 3): cols[:, k] = ∂x/∂ξ_k
-        adj = np.stack([np.cross(cols[:, 1], cols[:, 2]), np.cross(cols[:, 2], cols[:, 0]),
-                        np.cross(cols[:, 0], cols[:, 1])], axis=1)  # (e, 3, 3) rows
-        V += np.einsum("ei,ei->e", cols[:, 0], adj[:, 0])
-        B += np.einsum("ak,eki->eai", dN, adj)
+    dN = _GAUSS_DN[:, None]                                         # (g, 1, 8, 3) ∂N/∂ξ
+    cols = np.matmul(dN.transpose(0, 1, 3, 2), x[None])             # (g, e, 3, 3): cols[..., k, :] = ∂x/∂ξ_k
+    c0, c1, c2 = cols[:, :, 0], cols[:, :, 1], cols[:, :, 2]
+    adj = np.stack([np.cross(c1, c2), np.cross(c2, c0), np.cross(c0, c1)], axis=2)   # (g, e, 3, 3) rows
+    V = np.einsum("gei,gei->e", c0, adj[:, :, 0])
+    B = np.matmul(dN, adj).sum(axis=0)                              # (e, 8, 3)
     with np.errstate(divide="ignore", invalid="ignore"):
         dhdx = B / V[:, None, None]
     return np.ascontiguousarray(dhdx), V
