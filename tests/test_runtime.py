@@ -68,20 +68,30 @@ def test_the_cli_runs_its_kernels_on_the_pinned_layer(tmp_path):
     assert out.stdout.strip().splitlines()[-1] in runtime.THREADING_LAYERS
 
 
-def test_configure_caps_the_blas_pool_at_one_thread_and_importing_does_not():
-    # An OpenBLAS pool spinning after a matrix product held the core numba's worker needs (issue 17).
+def _blas_threads_after_configure(env):
     code = ("import json\n"
-            "from threadpoolctl import threadpool_info\n"
+            "from threadpoolctl import threadpool_info, threadpool_limits\n"
             "import visemeface.physics.simulation, numpy\n"
+            "threadpool_limits(2, user_api='blas')\n"
             "before = [p['num_threads'] for p in threadpool_info() if p['user_api'] == 'blas']\n"
             "from visemeface.runtime import configure\n"
             "configure()\n"
             "after = [p['num_threads'] for p in threadpool_info() if p['user_api'] == 'blas']\n"
             "print(json.dumps([before, after]))\n")
-    env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "GOMP_", "OPENBLAS_", "OMP_"))}
-    env["OPENBLAS_NUM_THREADS"] = "2"
+    env = {**{k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "GOMP_"))
+              and k not in runtime.BLAS_THREAD_VARIABLES}, **env}
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True,
                          timeout=120)
-    before, after = json.loads(out.stdout.strip().splitlines()[-1])
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def test_configure_caps_the_blas_pool_at_one_thread_and_importing_does_not():
+    # An OpenBLAS pool spinning after a matrix product held the core numba's worker needs (issue 17).
+    before, after = _blas_threads_after_configure({})
     assert before and all(n == 2 for n in before)
     assert after and all(n == 1 for n in after)
+
+
+def test_configure_keeps_a_blas_pool_size_the_user_set():
+    before, after = _blas_threads_after_configure({"OPENBLAS_NUM_THREADS": "2"})
+    assert before == after and all(n == 2 for n in after)

@@ -29,7 +29,8 @@ behaviour call it themselves. What it sets, and why:
   geometry) then left OpenBLAS threads spinning on the core numba's worker
   needs: the sticky face's step took 627 µs on 2 threads against 367 µs with
   the BLAS pool at one thread. The BLAS products here are small, so one
-  thread costs them little.
+  thread costs them little. A pool size the user set (``OPENBLAS_NUM_THREADS``
+  and the like) is kept.
 - **numba's cache folder**: numba caches compiled kernels beside the package
   and falls back to ``~/.cache/numba`` when that is read-only; where both are
   read-only (a system install with no home) a folder under the temporary
@@ -48,6 +49,9 @@ from visemeface.errors import InputError
 
 #: Threading layers in order of preference (see the module docstring).
 THREADING_LAYERS = ("omp", "workqueue")
+#: Variables by which a user sets the BLAS pool's size; where one is set, :func:`configure` leaves the pool alone.
+BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS")
+
 #: Barrier spin of GNU OpenMP (see the module docstring).
 GOMP_SPINCOUNT = "10000"
 
@@ -113,7 +117,7 @@ def configure(threads: int | None = None, environ=None) -> dict:
         config.THREADING_LAYER = env["NUMBA_THREADING_LAYER"]
         if env.get("NUMBA_CACHE_DIR"):
             config.CACHE_DIR = env["NUMBA_CACHE_DIR"]
-    if environ is None:
+    if environ is None and not any(env.get(k) for k in BLAS_THREAD_VARIABLES):
         limit_blas_threads(1)
     n = set_threads(threads) if threads is not None else None
     return {"threading_layer": env["NUMBA_THREADING_LAYER"], "threads": n,
