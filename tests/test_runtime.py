@@ -95,3 +95,23 @@ def test_configure_caps_the_blas_pool_at_one_thread_and_importing_does_not():
 def test_configure_keeps_a_blas_pool_size_the_user_set():
     before, after = _blas_threads_after_configure({"OPENBLAS_NUM_THREADS": "2"})
     assert before == after and all(n == 2 for n in after)
+
+
+def test_faster_thread_count_keeps_the_count_that_ran_faster():
+    import time
+
+    import numba
+    most = numba.config.NUMBA_NUM_THREADS
+    if most < 2:
+        import pytest
+        pytest.skip("one core: nothing to choose")
+    before = numba.get_num_threads()
+    try:
+        # a trial that is slower on more threads (a busy machine), then one that is faster
+        assert runtime.faster_thread_count(lambda: time.sleep(0.002 * numba.get_num_threads()), most) == 1
+        assert numba.get_num_threads() == 1
+        assert runtime.faster_thread_count(lambda: time.sleep(0.004 / numba.get_num_threads()), most) == most
+        assert numba.get_num_threads() == most
+        assert runtime.faster_thread_count(lambda: None, 1) == 1
+    finally:
+        numba.set_num_threads(before)

@@ -40,6 +40,7 @@ behaviour call it themselves. What it sets, and why:
 
 from __future__ import annotations
 
+import numbers
 import os
 import sys
 import tempfile
@@ -132,13 +133,48 @@ def limit_blas_threads(n: int = 1) -> None:
     threadpool_limits(limits=int(n), user_api="blas")
 
 
+def faster_thread_count(trial, most: int, repeats: int = 3) -> int:
+    """Time ``trial()`` at ``most`` numba threads and at one; leave numba at the faster count and return it.
+
+    For work whose result does not depend on the thread count (the FEM face's steps: each element and
+    each node is one thread's, so any count gives the same bits). Two threads win on an idle 2-core
+    machine and lose when another process is busy (module docstring), so a run measures rather than
+    guesses. Each count's figure is the best of ``repeats`` timed calls after an untimed one.
+    """
+    import time
+
+    import numba
+
+    most = int(most)
+    times = {}
+    for n in (most, 1) if most > 1 else (1,):
+        numba.set_num_threads(n)
+        trial()
+        best = float("inf")
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            trial()
+            best = min(best, time.perf_counter() - t0)
+        times[n] = best
+    n = min(times, key=times.get)
+    numba.set_num_threads(n)
+    return n
+
+
+def check_threads(n) -> int:
+    """``n`` as a numba thread count (1 .. the cores numba sees), or a one-line :class:`InputError`."""
+    import numba
+
+    most = numba.config.NUMBA_NUM_THREADS
+    if isinstance(n, bool) or not isinstance(n, numbers.Integral) or not 1 <= n <= most:
+        raise InputError(f"--threads must be from 1 to {most} on this machine, got {n!r}")
+    return int(n)
+
+
 def set_threads(n: int | None) -> int:
     """Set numba's thread count (None: leave it); returns the count in use."""
     import numba
 
     if n is not None:
-        most = numba.config.NUMBA_NUM_THREADS
-        if not 1 <= int(n) <= most:
-            raise InputError(f"--threads must be from 1 to {most} on this machine, got {n}")
-        numba.set_num_threads(int(n))
+        numba.set_num_threads(check_threads(n))
     return numba.get_num_threads()

@@ -613,6 +613,32 @@ def test_a_step_is_its_parts_bit_for_bit(model):
     assert all(np.array_equal(state.saliva[k], ref.saliva[k]) for k in ref.saliva)
 
 
+def test_threads_timed_during_a_run_give_the_same_frames_as_one_thread(model, monkeypatch):
+    # Without fixed threads a run times a few steps (on a copy) at numba's count and at one, at the start
+    # and every THREAD_CHECK_SECONDS, and runs on the faster; the frames are the same bits either way.
+    import numba
+    from visemeface.physics import simulation
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("one core: nothing to choose")
+    fem, rig = model
+    track = _ramp(rig, fps=100, start=0.0, ramp=0.05, hold=0.0)
+    monkeypatch.setattr(simulation, "THREAD_CHECK_SECONDS", 0.02)      # re-time every 2 frames
+    runs = {}
+    try:
+        for threads in (None, 1):
+            numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+            sim = drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(threads=threads))
+            runs[threads] = [(f.vertices, f.displacement) for f in sim.frames()]
+            assert sim.threads in (1, numba.config.NUMBA_NUM_THREADS)
+    finally:
+        numba.set_num_threads(1)
+    assert len(runs[None]) == len(runs[1]) > 4
+    for (va, ua), (vb, ub) in zip(runs[None], runs[1]):
+        assert np.array_equal(va, vb) and np.array_equal(ua, ub)
+    with pytest.raises(InputError, match="--threads must be from 1 to"):
+        drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(threads=0))
+
+
 def test_no_force_term_knows_the_seam_and_terms_switch_off(model):
     # Free lips: tissue (the muscles as its active strain), saliva and drag; no dead loads,
     # no spring toward the rig's posture unless asked for, and then the same per unit mass everywhere.

@@ -57,7 +57,8 @@ def register(subparsers) -> None:
     phys.add_argument("--side", choices=SIDES, default="both",
                       help="also pull the lower lip down on one side (asymmetric opening)")
     phys.add_argument("--resolution", type=int, help="face vertices (default: the default face's)")
-    phys.add_argument("--threads", type=int, help="numba threads (default: all cores)")
+    phys.add_argument("--threads", type=int, help="numba threads (default: the faster of all cores and one, "
+                      "timed during the run; the result is the same at any count)")
     p.add_argument("--fps", type=float, default=60.0, help="frame rate (default 60, the seed's camera)")
     opt.add_render_arguments(p, view="mouth")
     opt.add_output_arguments(p, "SCENARIO.mp4", resumable="continue an interrupted run from its checkpoint")
@@ -85,16 +86,13 @@ def run(args) -> int:
     from visemeface.face.procedural import default_face
     from visemeface.muscles.rig import MuscleRig
     from visemeface.physics.drive import scenario_track
-    from visemeface.runtime import set_threads
 
     _check(args)
     stem = (args.output or Path(f"{args.scenario}.mp4")).with_suffix("")
     sinks = opt.sinks_from_args(args, Path(f"{args.scenario}.mp4"), defaults={"measures": Path(f"{stem}.saliva.csv")})
     render = opt.render_from_args(args)
-    physics = opt.physics_from_args(args, dt=args.dt, damping=args.damping,
+    physics = opt.physics_from_args(args, dt=args.dt, damping=args.damping, threads=args.threads,
                                     glue_file=None if args.glue_file is None else str(args.glue_file))
-    if args.threads is not None:
-        set_threads(args.threads)
     face = default_face(resolution=args.resolution)
     rig = MuscleRig.from_file(face)
     track = scenario_track(args.scenario, rig.names, fps=args.fps, jaw=args.jaw, side=args.side)

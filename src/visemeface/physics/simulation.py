@@ -32,6 +32,10 @@ PHYSICS = ("sticky", "elastic")
 MIN_JACOBIAN = 0.3
 #: Force terms that can be switched off (:mod:`visemeface.physics.terms`).
 TERMS = ("tissue", "muscles", "saliva", "drag", "posture")
+#: How often (simulated seconds) a run without fixed threads re-times its thread counts, and how many
+#: steps each timing takes: about 1 % of the run's time at 60 fps on the default face.
+THREAD_CHECK_SECONDS = 0.5
+THREAD_TRIAL_STEPS = 10
 
 
 @dataclass(frozen=True)
@@ -56,6 +60,9 @@ class PhysicsSettings:
     F_int(U), :class:`~visemeface.physics.terms.MuscleLoads`).
     ``min_jacobian`` bounds the target's volume ratio (:meth:`FaceDrive.untangle`);
     ``field_smoothing`` averages the rig's surface field over quad neighbours.
+    ``threads``: numba threads for the steps; None (the default) times a few steps at numba's thread count
+    and at one, at the start and every :data:`THREAD_CHECK_SECONDS` of simulated time, and runs on the
+    faster (:func:`~visemeface.runtime.faster_thread_count`; the result is the same bits at any count).
     """
 
     dt: float | None = None
@@ -73,6 +80,7 @@ class PhysicsSettings:
     muscles: str = "active"
     field_smoothing: int = 0
     min_jacobian: float = MIN_JACOBIAN
+    threads: int | None = None
 
 
 @dataclass
@@ -106,6 +114,9 @@ def _check_settings(physics: str, settings: PhysicsSettings) -> None:
         raise InputError(f"muscles must be 'active' or 'loads', got {settings.muscles!r}")
     if settings.lip_bone not in ("free", "muscle"):
         raise InputError(f"lip_bone must be 'free' or 'muscle', got {settings.lip_bone!r}")
+    if settings.threads is not None:
+        from visemeface.runtime import check_threads
+        check_threads(settings.threads)
     for name in settings.off:
         if name not in TERMS:
             raise InputError(f"unknown force term {name!r}" + close_matches(name, TERMS)
@@ -220,6 +231,10 @@ class StickySimulation:
         self.integrator = CentralDifference(self.model)
         self.state: SimState | None = None
         self.rest_gaps = fem.rest_gaps
+        import numba
+        self._most_threads = numba.get_num_threads()
+        #: numba threads the steps run on (see PhysicsSettings.threads).
+        self.threads = settings.threads
 
     @property
     def n_frames(self) -> int:
@@ -268,15 +283,30 @@ class StickySimulation:
             first = int(start["frame"]) + 1
             if self.state.step != (first - 1) * spf or self.state.dt != self.dt:
                 raise InputError("the checkpoint's step does not match its frame")
-        # One step on a copy compiles (or loads) every kernel before the first frame, so an
-        # interrupt never lands in numba's compiler; the step's caches are pure functions of time.
-        self.integrator.step(self.state.copy())
+        # Steps on a copy compile (or load) every kernel before the first frame, so an interrupt never
+        # lands in numba's compiler, and choose the thread count; the step's caches are pure functions of time.
+        self._pick_threads()
+        check = max(1, int(round(THREAD_CHECK_SECONDS * self.fps)))
         if start is not None:
             self.integrator.advance(self.state, spf)
         for k in range(first, self.n_frames):
             if k > first:
+                if (k - first) % check == 0:
+                    self._pick_threads()
                 self.integrator.advance(self.state, spf)
             yield self._frame(k)
+
+    def _pick_threads(self) -> None:
+        """Run on ``settings.threads``, or time :data:`THREAD_TRIAL_STEPS` steps on a copy of the state at
+        numba's thread count and at one and keep the faster."""
+        from visemeface.runtime import faster_thread_count, set_threads
+
+        if self.settings.threads is not None or self._most_threads == 1:
+            set_threads(self.settings.threads or 1)
+            self.integrator.step(self.state.copy())
+            return
+        self.threads = faster_thread_count(lambda: self.integrator.advance(self.state.copy(), THREAD_TRIAL_STEPS),
+                                           self._most_threads)
 
     def _frame(self, k: int) -> SimFrame:
         st = self.state
