@@ -22,7 +22,8 @@ behaviour call it themselves. What it sets, and why:
   345 µs. The default (300,000) is worse under load: with another busy process
   on the 2 cores a spinning worker holds the core the main thread needs (12 ms a
   step measured then; at 10,000 it was 0.9 ms against 0.49 ms at 1000, and one
-  thread, 0.42 ms, is then the better choice: ``--threads 1``). It only matters
+  thread, 0.42 ms, is then the better choice, which is why a simulation without
+  fixed threads times both, :func:`faster_thread_count`). It only matters
   before libgomp is first loaded.
 - **BLAS threads: 1** (threadpoolctl). numpy's OpenBLAS pool spins for a while
   after each call; the few matrix products of a run (rig poses, fits, element
