@@ -443,7 +443,7 @@ def _step_nb(ue, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, energy, want
 @njit(**_SERIAL)
 def _step_serial(ue, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, energy, want_energy, ptr, slot, R, A, B, C,
                  u, uprev, unew):  # pragma: no cover - compiled
-    """:func:`_step_nb` on one thread (in index order: the orders only matter between threads)."""
+    """:func:`_step_nb` on one thread."""
     for e in range(conn.shape[0]):
         _element_force(e, ue, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, False, energy, want_energy)
     fe_flat = fe.reshape(-1, 3)
@@ -857,28 +857,22 @@ class TLEDSolver:
                                          self._B, self._C, u, u_prev, u_new)
                 if not jmin > 0.0:
                     self._check(step, t)
-                self._impose(u_new, t + dt)
-                if output:
-                    yield self._frame(step, t, u, u_new, u_prev)
-                u_prev, u, u_new = u, u_new, u_prev
-                continue
-            self._element_forces(u, output)
-            self._check(step, t)
-            if self.element_hook is not None:
-                self._apply_hook(step, t)
-            R = self._external(t)
-            if numba_backend:
-                self._int_kernel(fe_flat, self._ptr, self._slot, R, self._A, self._B, self._C, u, u_prev, u_new)
             else:
-                _gather_np(fe_flat, self._conn_flat, force0)
-                np.multiply(self._A, R - force0, out=u_new)
-                u_new += self._B * u + self._C * u_prev
+                self._element_forces(u, output)
+                self._check(step, t)
+                if self.element_hook is not None:
+                    self._apply_hook(step, t)
+                R = self._external(t)
+                if numba_backend:
+                    self._int_kernel(fe_flat, self._ptr, self._slot, R, self._A, self._B, self._C, u, u_prev,
+                                     u_new)
+                else:
+                    _gather_np(fe_flat, self._conn_flat, force0)
+                    np.multiply(self._A, R - force0, out=u_new)
+                    u_new += self._B * u + self._C * u_prev
             self._impose(u_new, t + dt)
             if output:
-                yield self._frame(step, t, u, u_new, u_prev)
+                v = (u_new - u_prev) / (2.0 * dt)
+                yield Frame(step, t, u.copy(), float(0.5 * np.einsum("n,ni,ni->", self.mass, v, v)),
+                            float(self._energy.sum()), v)
             u_prev, u, u_new = u, u_new, u_prev
-
-    def _frame(self, step: int, t: float, u, u_new, u_prev) -> Frame:
-        v = (u_new - u_prev) / (2.0 * self.dt)
-        return Frame(step, t, u.copy(), float(0.5 * np.einsum("n,ni,ni->", self.mass, v, v)),
-                     float(self._energy.sum()), v)
