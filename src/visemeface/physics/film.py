@@ -224,7 +224,7 @@ def _pull_push(k, uv, n, grads, volumes, modulus, lc, flow, pull, push):  # prag
 
 
 @njit(inline="always", cache=True)
-def _cohesive_damage(x, Z, d_old, thick, strand, modulus, lc):  # pragma: no cover - compiled
+def _cohesive_damage(x, Z, d_old, thick, strand, sp, se):  # pragma: no cover - compiled
     """Damage D of a slab on the film's softening branch (a bilinear cohesive law).
 
     In the separation δ = (x − 1)·h across the lips (h the slab's rest thickness, x the
@@ -233,7 +233,8 @@ def _cohesive_damage(x, Z, d_old, thick, strand, modulus, lc):  # pragma: no cov
     T(δ) = σ_p (δ_p + strand − δ) / strand. The pull is (1 − D) σ(x) with
     D = max(D_old, 1 − T(δ)/σ(x)) (irreversible: unloading goes back toward zero
     along the damaged stiffness). The energy to part the film is
-    G_c = ½ σ_p (δ_p + strand) per unit area, whatever the slab's size.
+    G_c = ½ σ_p (δ_p + strand) per unit area, whatever the slab's size. ``sp`` and ``se`` are
+    σ(√Z) and σ(x) (:func:`_film_stress`).
     """
     xp = np.sqrt(Z)
     dp = (xp - 1.0) * thick
@@ -242,8 +243,6 @@ def _cohesive_damage(x, Z, d_old, thick, strand, modulus, lc):  # pragma: no cov
         return d_old
     if dlt >= dp + strand:
         return 1.0                                # (strand 0: a brittle break, D_s = 1 past the peak)
-    sp = _film_stress(xp, modulus, lc)
-    se = _film_stress(x, modulus, lc)
     d = 1.0 - sp * (dp + strand - dlt) / (strand * se) if se > 0.0 else 1.0
     return min(max(d, d_old), 1.0)
 
@@ -255,11 +254,11 @@ def _damage_step(Q, x, Z, d_old, thick, strand, rupture, dt, modulus, lc):  # pr
     (a strand thins before it snaps) but never pulling harder than at the breaking point."""
     if Q <= 1.0:
         return 0.0
-    d = _cohesive_damage(x, Z, d_old, thick, strand, modulus, lc)
+    sp = _film_stress(np.sqrt(Z), modulus, lc)
+    se = _film_stress(x, modulus, lc)
+    d = _cohesive_damage(x, Z, d_old, thick, strand, sp, se)
     if rupture > 0.0:
         d = d_old + (1.0 - np.exp(-dt / rupture)) * (d - d_old)
-        sp = _film_stress(np.sqrt(Z), modulus, lc)
-        se = _film_stress(x, modulus, lc)
         if se > sp:
             d = max(d, 1.0 - sp / se)
     return d
