@@ -233,8 +233,10 @@ class StickySimulation:
         self.rest_gaps = fem.rest_gaps
         import numba
         self._most_threads = numba.get_num_threads()
+        #: Whether the thread count is timed during the run (no fixed count, more than one thread to try).
+        self._timed = settings.threads is None and self._most_threads > 1
         #: numba threads the steps run on (see PhysicsSettings.threads).
-        self.threads = settings.threads
+        self.threads = settings.threads if settings.threads is not None else self._most_threads
 
     @property
     def n_frames(self) -> int:
@@ -291,7 +293,7 @@ class StickySimulation:
             self.integrator.advance(self.state, spf)
         for k in range(first, self.n_frames):
             if k > first:
-                if (k - first) % check == 0:
+                if self._timed and (k - first) % check == 0:
                     self._pick_threads()
                 self.integrator.advance(self.state, spf)
             yield self._frame(k)
@@ -301,8 +303,8 @@ class StickySimulation:
         numba's thread count and at one and keep the faster."""
         from visemeface.runtime import faster_thread_count, set_threads
 
-        if self.settings.threads is not None or self._most_threads == 1:
-            set_threads(self.settings.threads or 1)
+        if not self._timed:
+            set_threads(self.threads)
             self.integrator.step(self.state.copy())
             return
         self.threads = faster_thread_count(lambda: self.integrator.advance(self.state.copy(), THREAD_TRIAL_STEPS),
