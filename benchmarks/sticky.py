@@ -6,9 +6,10 @@
 1. ``fem_face``: wall seconds per simulated second for the default FEM face
    (the "open" scenario's first ``--seconds``; target <= 10 s on 2 cores, issue 17), at
    each numba thread count in ``--threads`` and each time step in ``--dt``: ``auto`` (the
-   face's stable limit, the default since issue 17) and ``1e-5`` (the seed's step, the
-   single-rate run before it), back to back in one run; ``speedup`` = the 1e-5 run's
-   wall time / the auto run's at the same thread count.
+   default: multi-rate, the tissue's stable step with the film's nodes in substeps at the
+   film's), ``single`` (everything at the film's stable step, the default before the
+   multi-rate step) and ``1e-5`` (the seed's step), back to back in one run; ``speedup`` =
+   each other run's wall time / the auto run's at the same thread count.
 2. ``speak_sticky``: the library path ``speak --physics sticky`` takes on the
    3 s example (``transcripts/one_five_zero_zero_six.txt``): transcript ->
    activation track -> :func:`visemeface.physics.drive.simulate_track` ->
@@ -32,7 +33,7 @@ def emit(**kw):
     print(json.dumps(kw), flush=True)
 
 
-def bench_fem_face(seconds: float, threads: int, dt: float | None = None) -> float:
+def bench_fem_face(seconds: float, threads: int, dt: float | None = None, multirate: bool = True) -> float:
     from visemeface.face.procedural import default_face
     from visemeface.muscles.rig import MuscleRig
     from visemeface.physics.drive import PhysicsSettings, StickySimulation, scenario_track
@@ -45,7 +46,7 @@ def bench_fem_face(seconds: float, threads: int, dt: float | None = None) -> flo
     fem = build_fem_face(face)
     track = scenario_track("open", rig.names, fps=60)
     track = track.iloc[: int(round(seconds * 60)) + 1]
-    sim = StickySimulation(fem, rig, track, settings=PhysicsSettings(dt=dt, threads=threads))
+    sim = StickySimulation(fem, rig, track, settings=PhysicsSettings(dt=dt, threads=threads, multirate=multirate))
     it = sim.frames()
     next(it)                                   # compile / warm up (frame 0)
     t0 = time.perf_counter()
@@ -55,7 +56,8 @@ def bench_fem_face(seconds: float, threads: int, dt: float | None = None) -> flo
     wall = time.perf_counter() - t0
     simulated = n / sim.fps
     emit(benchmark="fem_face", threads=threads, nodes=fem.mesh.n_nodes, hexahedra=fem.mesh.n_elements,
-         saliva=len(fem.saliva), film_slabs=getattr(getattr(sim, "film", None), "n_elements", None), dt=sim.dt, simulated_s=round(simulated, 4), wall_s=round(wall, 2),
+         saliva=len(fem.saliva), film_slabs=getattr(getattr(sim, "film", None), "n_elements", None), dt=sim.dt,
+         substeps=getattr(sim, "substeps", 1), simulated_s=round(simulated, 4), wall_s=round(wall, 2),
          wall_per_simulated_s=round(wall / simulated, 1), steps_per_s=round(n * sim.steps_per_frame / wall),
          target_wall_per_simulated_s=10, stable_limit=sim.stability["dt"], load_average=os.getloadavg()[0])
     return wall / simulated
@@ -100,18 +102,24 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--seconds", type=float, default=0.5, help="simulated seconds for fem_face (default 0.5)")
     ap.add_argument("--threads", default="1,2", help="numba thread counts to try (default 1,2)")
-    ap.add_argument("--dt", default="auto,1e-5", help="time steps: 'auto' (the stable limit) and/or seconds "
-                    "(default auto,1e-5: after and before issue 17)")
+    ap.add_argument("--dt", default="auto,single,1e-5", help="time steps: 'auto' (multi-rate at the stable "
+                    "limits), 'single' (one step, the film's limit) and/or seconds (default auto,single,1e-5)")
     ap.add_argument("--skip-speech", action="store_true")
     args = ap.parse_args(argv)
     counts = [int(x) for x in args.threads.split(",")]
-    steps = [None if x == "auto" else float(x) for x in args.dt.split(",")]
+    steps = args.dt.split(",")
+
+    def run(n, x):
+        if x in ("auto", "single"):
+            return bench_fem_face(args.seconds, n, None, multirate=x == "auto")
+        return bench_fem_face(args.seconds, n, float(x), multirate=False)
+
     for n in counts:
-        per = {dt: bench_fem_face(args.seconds, n, dt) for dt in steps}
-        if None in per and len(per) > 1:
-            for dt, w in per.items():
-                if dt is not None:
-                    emit(benchmark="fem_face_speedup", threads=n, versus_dt=dt, speedup=round(w / per[None], 2))
+        per = {x: run(n, x) for x in steps}
+        if "auto" in per and len(per) > 1:
+            for x, w in per.items():
+                if x != "auto":
+                    emit(benchmark="fem_face_speedup", threads=n, versus=x, speedup=round(w / per["auto"], 2))
     if not args.skip_speech:
         bench_speak(max(counts))
 

@@ -89,7 +89,13 @@ def test_the_face_takes_its_stable_limit_and_refuses_a_longer_step(coarse_face):
     assert st["dt"] == min(st["spectral"], *st["element"].values())
     assert st["element"]["saliva"] < st["element"]["tissue"]          # the stiff saliva sets it
     assert st["tissue_only"] > st["element"]["tissue"]                  # the element bound is the safe side
-    assert 3e-5 < sim.dt <= st["dt"] and sim.steps_per_frame == int(np.ceil(1 / (60 * st["dt"]) - 1e-9))
+    # multi-rate (the default): the tissue's own step, the film's nodes in substeps at the film's
+    assert st["tissue_step"] == min(st["element"]["tissue"], st["tissue_only"])
+    assert sim.steps_per_frame == int(np.ceil(1 / (60 * st["tissue_step"]) - 1e-9)) and sim.dt <= st["tissue_step"]
+    assert sim.substeps == int(np.ceil(sim.dt / st["dt"] - 1e-9)) > 1 and sim.dt / sim.substeps <= st["dt"]
+    single = drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(multirate=False))
+    assert 3e-5 < single.dt <= st["dt"] and single.steps_per_frame == int(np.ceil(1 / (60 * st["dt"]) - 1e-9))
+    assert single.substeps == 1
     assert drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(dt=1e-5)).dt <= 1e-5
     with pytest.raises(InputError, match=r"exceeds the stable limit .* of this face; give --dt <="):
         drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(dt=1.01 * st["dt"]))

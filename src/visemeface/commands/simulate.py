@@ -50,8 +50,9 @@ def register(subparsers) -> None:
     phys.add_argument("--glue-file", type=Path, metavar="CSV", help="glue per element (element,glue) or "
                       "profile (s,glue)")
     phys.add_argument("--critical-moisture", type=float, metavar="MC", help="critical moisture Mc (default 100)")
-    phys.add_argument("--dt", type=float, help="largest time step in s (default: the face's stable limit, "
-                      "printed at the end; a larger one is refused)")
+    phys.add_argument("--dt", type=float, help="one time step in s for every node (default: multi-rate, the "
+                      "tissue's stable step with the lips' film nodes in substeps at the film's, printed at the "
+                      "end; a step above the film's limit is refused)")
     phys.add_argument("--damping", type=float, default=80.0, help="mass damping alpha in 1/s (default 80)")
     phys.add_argument("--jaw", type=float, default=0.35, help="jaw activation when open (default 0.35)")
     phys.add_argument("--side", choices=SIDES, default="both",
@@ -104,6 +105,7 @@ def run(args) -> int:
     if not args.quiet:
         c = motion.sim.fem.counts()
         print(f"FEM face: {c['nodes']} nodes, {c['elements']} hexahedra ({c['saliva']} saliva); "
-              f"dt {motion.sim.dt:.4g} s (stable limit {motion.sim.stability['dt']:.4g} s)")
+              f"dt {motion.sim.dt:.4g} s in {motion.sim.substeps} film substep(s) "
+              f"(stable limits: tissue {motion.sim.stability['tissue_step']:.4g} s, film {motion.sim.stability['dt']:.4g} s)")
         print(pipeline.summary(stats, args.fps))
     return 0

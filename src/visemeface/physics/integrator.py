@@ -17,6 +17,28 @@ advances a :class:`~visemeface.physics.state.SimState` by
 degrees of freedom held at zero and the jaw nodes set to their value at
 ``tⁿ⁺¹``. Everything a step reads is in (model, state), so stepping a restored
 state repeats a run bit for bit.
+
+**Multi-rate (issue 17).** The saliva film is far stiffer than the tissue (its
+stable step on the default face is 4.8e-5 s, the tissue's 1.8e-4 s) but acts
+only on the few nodes it is tied to (52 of 3,558). With ``substeps`` m > 1 the
+other nodes take the step Δt and those *film nodes* take m substeps δt = Δt/m:
+nodal-partition subcycling (Belytschko, Yen & Mullen 1979; Belytschko, Liu &
+Moran 2000, §6.6). At substep j the film nodes' force is recomputed: the
+film's, and the tissue's from the elements that hold a film node, with the
+other nodes of those elements at their linear interpolation between uⁿ and
+uⁿ⁺¹ (known: they stepped first); the rest of their force (muscles, drag) is
+held at tⁿ:
+
+.. math::
+
+   x_{j+1} = a\\,\\big(R^n_{other} - F_{tissue}(x_j, \\tilde u(t_j)) + f_{film}(x_j, t_j)\\big)
+             + b\\,x_j + c\\,x_{j-1},\\qquad t_j = t^n + jδt
+
+(a, b, c the coefficients above at δt; the film's breaking rule advances at
+δt, as in the single-rate run), and the end of the last substep is the film
+nodes' uⁿ⁺¹. The film's stiffness is integrated at its own limit, the
+tissue's at its own. The film nodes' last substep position is part of the
+state (``SimState.fine_prev``), so a checkpoint resumes bit for bit.
 """
 
 from __future__ import annotations
@@ -42,6 +64,10 @@ class FaceModel:
         Time step (s) and mass-damping coefficient α (1/s).
     jaw_nodes : (k,) int; jaw : callable ``t -> (k, 3)`` prescribed displacement.
     terms : dict name -> Term, the tissue first.
+    substeps : int
+        Film substeps per step (1: single rate; see the module docstring).
+    film_nodes : (k,) int
+        The nodes the saliva film acts on (those it reads and loads), subcycled when ``substeps`` > 1.
     """
 
     tissue_solver: object
@@ -52,16 +78,24 @@ class FaceModel:
     jaw_nodes: np.ndarray
     jaw: object
     terms: dict = field(default_factory=dict)
+    substeps: int = 1
+    film_nodes: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
 
     @property
     def n_nodes(self) -> int:
         return len(self.mass)
 
-    def external(self, state: SimState, t: float, R: np.ndarray) -> np.ndarray:
-        """R(u, t): the sum of every enabled term but the tissue (the one place they are summed)."""
+    @property
+    def multirate(self) -> bool:
+        """Whether the film's nodes are subcycled (more than one substep and the film switched on)."""
+        film = self.terms.get("saliva")
+        return self.substeps > 1 and film is not None and film.enabled and len(self.film_nodes) > 0
+
+    def external(self, state: SimState, t: float, R: np.ndarray, skip: tuple = ()) -> np.ndarray:
+        """R(u, t): the sum of every enabled term but the tissue and ``skip`` (the one place they are summed)."""
         R[:] = 0.0
         for name, term in self.terms.items():
-            if name != "tissue" and term.enabled:
+            if name != "tissue" and name not in skip and term.enabled:
                 term.add(state, t, R)
         return R
 
@@ -87,6 +121,28 @@ class CentralDifference:
         self._step = tled._step_nb if s.parallel else tled._step_serial
         self._R = np.zeros((model.n_nodes, 3))
         self._new = np.zeros((model.n_nodes, 3))
+        m = max(1, int(model.substeps))
+        fast = np.ascontiguousarray(model.film_nodes, dtype=np.int64)
+        self._fast = fast
+        if m > 1 and len(fast):
+            h = dt / m
+            mf = model.mass[fast]
+            a_f = 1.0 / (mf / h ** 2 + a * mf / (2.0 * h))
+            b_f = 2.0 * mf * a_f / h ** 2
+            c_f = a * mf * a_f / (2.0 * h) - b_f / 2.0
+            free = model.free[fast]
+            # held degrees of freedom keep their value at tⁿ through the substeps (the jaw is imposed after)
+            self._fine = tuple(np.ascontiguousarray(x[:, None] * free) for x in (a_f, b_f, c_f)) \
+                + (np.ascontiguousarray(1.0 - free),)
+            conn = model.tissue_solver.conn
+            touches = np.isin(conn, fast).any(axis=1)
+            #: The tissue elements that hold a film node, and every node of theirs.
+            self._elems = np.flatnonzero(touches).astype(np.int64)
+            self._ring = np.unique(conn[self._elems]).astype(np.int64)
+            self._G = np.zeros((len(fast), 3))
+            self._x = np.zeros((len(fast), 3))
+            self._film_u = np.zeros((model.n_nodes, 3))
+            self._film_R = np.zeros((model.n_nodes, 3))
 
     def start(self, u0=None, saliva: dict | None = None) -> SimState:
         """The state at rest in ``u0`` (zero velocity: u_prev = u0), jaw imposed at t = 0."""
@@ -94,7 +150,8 @@ class CentralDifference:
         u = np.zeros((n, 3)) if u0 is None else np.array(u0, dtype=np.float64)
         u *= self.model.free
         self.model.impose(u, 0.0)
-        return SimState(u, u.copy(), 0, self.model.dt, dict(saliva or {}))
+        fine = u[self._fast].copy() if self.model.multirate else None
+        return SimState(u, u.copy(), 0, self.model.dt, dict(saliva or {}), fine)
 
     def step(self, state: SimState) -> None:
         """Advance ``state`` by one step in place.
@@ -107,7 +164,8 @@ class CentralDifference:
         t = state.step * dt
         tissue = model.terms["tissue"]
         s = model.tissue_solver
-        R = model.external(state, t, self._R)
+        multirate = model.multirate
+        R = model.external(state, t, self._R, ("saliva",) if multirate else ())
         new = self._new
         if tissue.enabled:
             ue, dhdx, vol, gamma, hgk = tissue.inputs(state.u, t, state.step)
@@ -121,11 +179,109 @@ class CentralDifference:
             self._kernel(s._fe.reshape(-1, 3), s._ptr, s._slot, R, self._A, self._B, self._C, state.u,
                          state.u_prev, new)
         model.impose(new, (state.step + 1) * dt)
+        if multirate:                   # after the jaw: the film nodes' neighbours interpolate to its uⁿ⁺¹
+            self._substeps(state, t, R, new)
+            model.impose(new, (state.step + 1) * dt)
         # rotate the buffers: u_prev <- u <- new, the old u_prev becomes the next scratch
         self._new = state.u_prev
         state.u_prev, state.u = state.u, new
         state.step += 1
 
+    def _substeps(self, state: SimState, t: float, R: np.ndarray, new: np.ndarray) -> None:
+        """The film nodes' m substeps (module docstring): ``new``'s film-node rows become their uⁿ⁺¹."""
+        model, fast, s = self.model, self._fast, self.model.tissue_solver
+        tissue = model.terms["tissue"]
+        m = int(model.substeps)
+        h = model.dt / m
+        film = model.terms["saliva"].film
+        if state.fine_prev is None:           # a state made without multi-rate: start the film nodes at rest
+            state.fine_prev = state.u[fast].copy()
+        x, xp, U, Rf, G = self._x, state.fine_prev, self._film_u, self._film_R, self._G
+        a, b, c, hold = self._fine
+        _take_rows(state.u, fast, x)
+        for j in range(m):
+            _interpolate_rows(state.u, new, j / m, self._ring, U)
+            _put_rows(x, fast, U)
+            tj = t + j * h
+            if tissue.enabled:
+                ue, dhdx, vol, gamma, hgk = tissue.inputs(U, tj, state.step)
+                jmin = _boundary_forces(self._elems, fast, ue, s.conn, dhdx, vol, gamma, hgk, s.mu, s.K, s._fe,
+                                        s._jac, s._fdef, s._energy, s._ptr, s._slot, R, G)
+                if not jmin > 0.0:
+                    s._check(state.step, t)
+            else:
+                _take_rows(R, fast, G)
+            film.add_forces(U, tj, state.saliva, Rf, h)
+            _fine_update(fast, G, Rf, a, b, c, hold, x, xp)
+        _put_rows(x, fast, new)
+
     def advance(self, state: SimState, n_steps: int) -> None:
         for _ in range(int(n_steps)):
             self.step(state)
+
+
+from numba import njit  # noqa: E402
+
+from visemeface.physics.tled import _element_force  # noqa: E402
+
+
+@njit(cache=True, boundscheck=False)
+def _boundary_forces(elems, rows, ue, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, energy, ptr, slot, R,
+                     G):  # pragma: no cover - compiled
+    """The elements ``elems`` (every element that holds a node of ``rows``) at ``ue``, then
+    G[i] = R[n] − Σ of node n's element forces, n = rows[i]; returns their smallest J."""
+    jmin = np.inf
+    for k in range(elems.shape[0]):
+        e = elems[k]
+        _element_force(e, ue, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, False, energy, False)
+        if not jac[e] > 0.0:
+            jmin = jac[e]
+        elif jac[e] < jmin and jmin > 0.0:
+            jmin = jac[e]
+    fe_flat = fe.reshape(-1, 3)
+    for i in range(rows.shape[0]):
+        n = rows[i]
+        for d in range(3):
+            f = 0.0
+            for p in range(ptr[n], ptr[n + 1]):
+                f += fe_flat[slot[p], d]
+            G[i, d] = R[n, d] - f
+    return jmin
+
+
+@njit(cache=True, boundscheck=False)
+def _take_rows(u, rows, x):  # pragma: no cover - compiled
+    """x[i] = u[rows[i]]."""
+    for i in range(rows.shape[0]):
+        for d in range(3):
+            x[i, d] = u[rows[i], d]
+
+
+@njit(cache=True, boundscheck=False)
+def _interpolate_rows(u0, u1, w, rows, out):  # pragma: no cover - compiled
+    """out[n] = u0[n] + w (u1[n] − u0[n]) for n in rows."""
+    for i in range(rows.shape[0]):
+        n = rows[i]
+        for d in range(3):
+            out[n, d] = u0[n, d] + w * (u1[n, d] - u0[n, d])
+
+
+@njit(cache=True, boundscheck=False)
+def _put_rows(x, rows, out):  # pragma: no cover - compiled
+    """out[rows[i]] = x[i]."""
+    for i in range(rows.shape[0]):
+        for d in range(3):
+            out[rows[i], d] = x[i, d]
+
+
+@njit(cache=True, boundscheck=False)
+def _fine_update(rows, G, Rf, a, b, c, hold, x, xp):  # pragma: no cover - compiled
+    """One substep of the film nodes: x ← a (G + film force) + b x + c x_prev (held rows keep x), in place
+    (xp takes the old x); the film's force rows are zeroed for the next substep."""
+    for i in range(rows.shape[0]):
+        n = rows[i]
+        for d in range(3):
+            v = a[i, d] * (G[i, d] + Rf[n, d]) + b[i, d] * x[i, d] + c[i, d] * xp[i, d] + hold[i, d] * x[i, d]
+            xp[i, d] = x[i, d]
+            x[i, d] = v
+            Rf[n, d] = 0.0

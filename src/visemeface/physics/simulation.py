@@ -60,6 +60,9 @@ class PhysicsSettings:
     F_int(U), :class:`~visemeface.physics.terms.MuscleLoads`).
     ``min_jacobian`` bounds the target's volume ratio (:meth:`FaceDrive.untangle`);
     ``field_smoothing`` averages the rig's surface field over quad neighbours.
+    ``multirate``: with ``dt`` None, the tissue takes its own stable step and the saliva film's nodes
+    take substeps at the film's (:mod:`visemeface.physics.integrator`); False, or a ``dt`` given, runs
+    everything at one step.
     ``threads``: numba threads for the steps; None (the default) times a few steps at numba's thread count
     and at one, at the start and every :data:`THREAD_CHECK_SECONDS` of simulated time, and runs on the
     faster (:func:`~visemeface.runtime.faster_thread_count`; the result is the same bits at any count).
@@ -81,6 +84,7 @@ class PhysicsSettings:
     field_smoothing: int = 0
     min_jacobian: float = MIN_JACOBIAN
     threads: int | None = None
+    multirate: bool = True
 
 
 @dataclass
@@ -132,7 +136,7 @@ def steps_per_frame(fps: float, dt: float | None, limit: float) -> int:
     return int(np.ceil(1.0 / (fps * (limit if dt is None else dt)) - 1e-9))
 
 
-def build_model(fem, drive, film, settings: PhysicsSettings, dt: float):
+def build_model(fem, drive, film, settings: PhysicsSettings, dt: float, substeps: int = 1):
     """The :class:`FaceModel` of a run: tissue solver, masses, boundary conditions, terms."""
     from visemeface.physics import terms as T
     from visemeface.physics.hexmesh import HexMesh
@@ -164,7 +168,9 @@ def build_model(fem, drive, film, settings: PhysicsSettings, dt: float):
     for name in settings.off:
         if name in terms:
             terms[name].enabled = False
-    return FaceModel(tissue, mass, free, dt, settings.damping, drive.jaw_nodes, drive.jaw, terms)
+    film_nodes = np.unique(np.concatenate([film.n0.ravel(), film.n1.ravel()]))
+    return FaceModel(tissue, mass, free, dt, settings.damping, drive.jaw_nodes, drive.jaw, terms, substeps,
+                     film_nodes)
 
 
 class StickySimulation:
@@ -187,8 +193,9 @@ class StickySimulation:
     -----
     The time step is the largest ``dt' ≤ settings.dt`` that divides a frame
     (``1 / (fps · ceil(1 / (fps · dt)))``), so frames fall exactly on steps; ``settings.dt``
-    None (the default) takes the face's stable limit (:func:`~visemeface.physics.stability.face_stable_step`,
-    in :attr:`stability`), and a ``settings.dt`` above that limit is refused.
+    None (the default) takes the face's stable limits (:func:`~visemeface.physics.stability.face_stable_step`,
+    in :attr:`stability`): the tissue's, with the film's nodes in :attr:`substeps` at the film's
+    (``settings.multirate``); a ``settings.dt`` above the film's limit is refused.
     Everything is checked (dt against the stable limit, glue, moisture) when
     the object is made, before any simulation time is spent.
     """
@@ -217,8 +224,13 @@ class StickySimulation:
         self.film = SalivaFilm(mesh.nodes, hexes, ends, glue, settings.saliva, across=per_layer,
                                min_elements=settings.film_elements)
         self.stability = face_stable_step(mesh, fem.tissue, self.film, hourglass_kappa=settings.hourglass_kappa)
-        self.steps_per_frame = steps_per_frame(self.fps, settings.dt, self.stability["dt"])
+        film_dt = self.stability["dt"]
+        multirate = settings.multirate and settings.dt is None and "saliva" not in settings.off
+        self.steps_per_frame = steps_per_frame(self.fps, settings.dt,
+                                               self.stability["tissue_step"] if multirate else film_dt)
         self.dt = 1.0 / (self.fps * self.steps_per_frame)
+        #: Film substeps per step (1: single rate).
+        self.substeps = int(np.ceil(self.dt / film_dt - 1e-9)) if multirate else 1
         from visemeface.physics.hexmesh import HexMesh
         from visemeface.physics.materials import SOFT_TISSUE
         from visemeface.physics.tled import TLEDSolver
@@ -227,7 +239,7 @@ class StickySimulation:
         self.drive = FaceDrive(fem, rig, self.values, self.fps, loads.internal_forces,
                                field_smoothing=settings.field_smoothing, min_jacobian=settings.min_jacobian,
                                lip_bone=settings.lip_bone)
-        self.model = build_model(fem, self.drive, self.film, settings, self.dt)
+        self.model = build_model(fem, self.drive, self.film, settings, self.dt, self.substeps)
         self.integrator = CentralDifference(self.model)
         self.state: SimState | None = None
         self.rest_gaps = fem.rest_gaps
@@ -330,7 +342,7 @@ class StickySimulation:
         for arr in (self.fem.mesh.nodes, self.fem.mesh.hexes, self.values, self.film.glue):
             h.update(np.ascontiguousarray(arr).tobytes())
         s = self.settings
-        h.update(repr((self.physics, self.fps, self.dt, s.damping, s.hourglass_kappa, s.saliva, s.posture_hz,
+        h.update(repr((self.physics, self.fps, self.dt, self.substeps, s.damping, s.hourglass_kappa, s.saliva, s.posture_hz,
                        tuple(s.off), s.film_elements, s.film_corners, s.lip_bone, s.muscles, s.field_smoothing, s.min_jacobian)).encode())
         return h.hexdigest()[:16]
 

@@ -116,7 +116,10 @@ def face_stable_step(mesh, tissue, film, *, hourglass_kappa: float) -> dict:
     ω_max² ≤ λ(M⁻¹K_tissue) + s λ(M⁻¹K_film) (Weyl's inequality, both stiffnesses
     positive semi-definite; ``s`` = :func:`film_stiffening`), each λ by
     :func:`max_eigenvalue` at rest with every node free (holding nodes only lowers ω);
-    ``dt`` the smaller of the two (and at most :data:`FLOW_STEP` for a viscous film).
+    ``dt`` the smaller of the two (and at most :data:`FLOW_STEP` for a viscous film): the single-rate
+    step, and the film's substep in a multi-rate run; ``tissue_step`` the tissue's own limit (its element
+    bound and :data:`SAFETY` × its spectral limit ``tissue_only``): the multi-rate run's step
+    (:mod:`visemeface.physics.integrator`).
 
     Parameters
     ----------
@@ -150,5 +153,6 @@ def face_stable_step(mesh, tissue, film, *, hourglass_kappa: float) -> dict:
     dt = min(min(element.values()), spectral)
     if film.params.fluidity > 0.0:
         dt = min(dt, FLOW_STEP)
-    return {"dt": dt, "element": element, "spectral": spectral,
-            "tissue_only": SAFETY * critical_step(lam_t), "film_stiffening": s}
+    tissue_only = SAFETY * critical_step(lam_t)
+    return {"dt": dt, "element": element, "spectral": spectral, "tissue_only": tissue_only,
+            "tissue_step": min(element["tissue"], tissue_only), "film_stiffening": s}

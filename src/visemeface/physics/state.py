@@ -32,6 +32,9 @@ class SimState:
     dt : float
     saliva : dict of arrays
         ``broken``, ``dry``, ``stored`` (E, 8, 3), ``stretch``, ``flow``, ``damage`` per film slab.
+    fine_prev : (k, 3) float64 or None
+        With a multi-rate step (:mod:`visemeface.physics.integrator`): the film nodes' displacement one
+        substep before ``step``; None for a single-rate run.
     """
 
     u: np.ndarray
@@ -39,6 +42,7 @@ class SimState:
     step: int
     dt: float
     saliva: dict = field(default_factory=dict)
+    fine_prev: np.ndarray | None = None
 
     @property
     def t(self) -> float:
@@ -51,12 +55,15 @@ class SimState:
 
     def copy(self) -> SimState:
         return SimState(self.u.copy(), self.u_prev.copy(), int(self.step), float(self.dt),
-                        {k: v.copy() for k, v in self.saliva.items()})
+                        {k: v.copy() for k, v in self.saliva.items()},
+                        None if self.fine_prev is None else self.fine_prev.copy())
 
     def to_dict(self) -> dict:
         """Plain arrays and numbers (``np.savez`` without pickle keeps every bit)."""
         out = {"u": self.u.copy(), "u_prev": self.u_prev.copy(), "step": int(self.step), "dt": float(self.dt)}
         out.update({f"saliva_{k}": v.copy() for k, v in self.saliva.items()})
+        if self.fine_prev is not None:
+            out["fine_prev"] = self.fine_prev.copy()
         return out
 
     @classmethod
@@ -66,5 +73,6 @@ class SimState:
             saliva["flow"] = np.zeros_like(saliva["stretch"])
         if "stretch" in saliva and "damage" not in saliva:    # ... or soften by the cohesive law
             saliva["damage"] = np.zeros_like(saliva["stretch"])
+        fine = np.array(d["fine_prev"], dtype=np.float64) if "fine_prev" in d else None
         return cls(np.array(d["u"], dtype=np.float64), np.array(d["u_prev"], dtype=np.float64),
-                   int(d["step"]), float(d["dt"]), saliva)
+                   int(d["step"]), float(d["dt"]), saliva, fine)
