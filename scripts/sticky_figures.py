@@ -257,6 +257,8 @@ def main():
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--dt", type=float, default=None,
                     help="time step (s); default: the face's stable limit (issue 17); 1e-5: the seed's step")
+    ap.add_argument("--single-rate", action="store_true",
+                    help="every node at the film's step (default: multi-rate, the film's nodes in substeps)")
     ap.add_argument("--visemes", default=None, help="calibration: comma-separated DECtalk symbols (default all)")
     args = ap.parse_args()
     from visemeface.runtime import set_threads
@@ -266,7 +268,7 @@ def main():
     only = set(args.only.split(","))
     from visemeface.physics.saliva import SalivaParams
     common = {"lip_bone": args.lip_bone, "posture_hz": args.posture_hz, "muscles": args.muscles,
-              "film_corners": args.film_corners, "dt": args.dt}
+              "film_corners": args.film_corners, "dt": args.dt, "multirate": not args.single_rate}
     extra = {} if args.rupture_time is None else {"rupture_time": args.rupture_time}
     common["saliva"] = SalivaParams(soften=args.soften, viscosity=args.viscosity, strand=args.strand, **extra)
     global RAMP, IMAGE

@@ -722,7 +722,7 @@ class TLEDSolver:
     @staticmethod
     def _values(f, t, k: int, what: str) -> np.ndarray:
         v = np.asarray(f(t), dtype=np.float64)
-        if v.shape == (k, 3):
+        if v.shape == (k, 3) or v.shape == (3,):     # (3,): numpy's assignment broadcasts it (no copy made)
             return v
         try:
             v = np.broadcast_to(v, (k, 3))
