@@ -173,13 +173,21 @@ class SalivaFilm:
 
     def add_forces(self, u, t: float, state: dict, R, dt: float = 1e-5) -> None:
         """Advance the film's ``state`` one step (``dt``) at time ``t`` and subtract its nodal forces from ``R``."""
+        _film_step(u, R, *self.rule_args(self.breaking_points_at(t), state, dt))
+
+    def breaking_points_at(self, t: float) -> np.ndarray:
+        """Z per slab at ``t``: the rest values when the film does not evaporate (no work a step)."""
+        return self._Z0 if self.params.evaporation == 0.0 else self.breaking_points(t)
+
+    def rule_args(self, Z, state: dict, dt: float) -> tuple:
+        """The compiled rule's (:func:`_film_step`) arguments after ``(u, R)``, for a step ``dt`` at
+        breaking points ``Z`` (an array the caller may refill between calls)."""
         p = self.params
-        Z = self._Z0 if p.evaporation == 0.0 else self.breaking_points(t)
-        _film_step(u, R, self.n0, self.n1, self.w, self.cgrads, self.grads, self.volumes, self.axis, Z,
-                   state["broken"], state["dry"], state["stored"], state["stretch"], p.decay ** (dt / DECAY_STEP),
-                   p.rebond_strain, p.squeeze, self.modulus, FILM_STIFF_STRETCH, p.soften, state["flow"],
-                   self.thickness, self.band, p.film_thickness, p.fluidity, dt, state["damage"], p.strand,
-                   p.rupture_time)
+        return (self.n0, self.n1, self.w, self.cgrads, self.grads, self.volumes, self.axis, Z,
+                state["broken"], state["dry"], state["stored"], state["stretch"], p.decay ** (dt / DECAY_STEP),
+                p.rebond_strain, p.squeeze, self.modulus, FILM_STIFF_STRETCH, p.soften, state["flow"],
+                self.thickness, self.band, p.film_thickness, p.fluidity, dt, state["damage"], p.strand,
+                p.rupture_time)
 
 
 from numba import njit  # noqa: E402

@@ -143,6 +143,11 @@ class CentralDifference:
             self._x = np.zeros((len(fast), 3))
             self._film_u = np.zeros((model.n_nodes, 3))
             self._film_R = np.zeros((model.n_nodes, 3))
+            self._ue = np.zeros((model.n_nodes, 3))
+            film = model.terms["saliva"].film
+            #: The film's breaking points: the buffer its rule reads, and its value at each substep.
+            self._Z = film.breaking_points_at(0.0).copy()
+            self._Zs = np.ascontiguousarray(np.tile(self._Z, (m, 1)))
 
     def start(self, u0=None, saliva: dict | None = None) -> SimState:
         """The state at rest in ``u0`` (zero velocity: u_prev = u0), jaw imposed at t = 0."""
@@ -188,32 +193,24 @@ class CentralDifference:
         state.step += 1
 
     def _substeps(self, state: SimState, t: float, R: np.ndarray, new: np.ndarray) -> None:
-        """The film nodes' m substeps (module docstring): ``new``'s film-node rows become their uⁿ⁺¹."""
-        model, fast, s = self.model, self._fast, self.model.tissue_solver
-        tissue = model.terms["tissue"]
+        """The film nodes' m substeps (module docstring), in one compiled call (:func:`_substep_loop`):
+        ``new``'s film-node rows become their uⁿ⁺¹."""
+        model, s = self.model, self.model.tissue_solver
+        tissue, film = model.terms["tissue"], model.terms["saliva"].film
         m = int(model.substeps)
         h = model.dt / m
-        film = model.terms["saliva"].film
         if state.fine_prev is None:           # a state made without multi-rate: start the film nodes at rest
-            state.fine_prev = state.u[fast].copy()
-        x, xp, U, Rf, G = self._x, state.fine_prev, self._film_u, self._film_R, self._G
-        a, b, c, hold = self._fine
-        _take_rows(state.u, fast, x)
-        for j in range(m):
-            _interpolate_rows(state.u, new, j / m, self._ring, U)
-            _put_rows(x, fast, U)
-            tj = t + j * h
-            if tissue.enabled:
-                ue, dhdx, vol, gamma, hgk = tissue.inputs(U, tj, state.step)
-                jmin = _boundary_forces(self._elems, fast, ue, s.conn, dhdx, vol, gamma, hgk, s.mu, s.K, s._fe,
-                                        s._jac, s._fdef, s._energy, s._ptr, s._slot, R, G)
-                if not jmin > 0.0:
-                    s._check(state.step, t)
-            else:
-                _take_rows(R, fast, G)
-            film.add_forces(U, tj, state.saliva, Rf, h)
-            _fine_update(fast, G, Rf, a, b, c, hold, x, xp)
-        _put_rows(x, fast, new)
+            state.fine_prev = state.u[self._fast].copy()
+        times = [t + j * h for j in range(m)]
+        Ua, Ud, w, geo = tissue.segment(times, state.step)
+        if film.params.evaporation != 0.0:
+            self._Zs = np.stack([film.breaking_points(tj) for tj in times])
+        tis = (s.conn,) + tuple(geo) + (s.mu, s.K, s._fe, s._jac, s._fdef, s._energy, s._ptr, s._slot)
+        jmin = _substep_loop(self._fast, self._ring, self._elems, state.u, new, self._x, state.fine_prev,
+                             self._film_u, self._ue, self._film_R, self._G, R, self._fine, (Ua, Ud, w), tis,
+                             film.rule_args(self._Z, state.saliva, h), self._Z, self._Zs, tissue.enabled)
+        if not jmin > 0.0:
+            s._check(state.step, t)
 
     def advance(self, state: SimState, n_steps: int) -> None:
         for _ in range(int(n_steps)):
@@ -222,6 +219,7 @@ class CentralDifference:
 
 from numba import njit  # noqa: E402
 
+from visemeface.physics.film import _film_step  # noqa: E402
 from visemeface.physics.tled import _element_force  # noqa: E402
 
 
@@ -250,28 +248,57 @@ def _boundary_forces(elems, rows, ue, conn, dhdx, vol, gamma, hgk, mu, K, fe, ja
 
 
 @njit(cache=True, boundscheck=False)
-def _take_rows(u, rows, x):  # pragma: no cover - compiled
-    """x[i] = u[rows[i]]."""
-    for i in range(rows.shape[0]):
+def _substep_loop(fast, ring, elems, u, new, x, xp, U, ue, Rf, G, R, coef, field, tis, film_args, Z, Zs,
+                  tissue_on):  # pragma: no cover - compiled
+    """The film nodes' m = len(w) substeps of one step (the integrator's module docstring); returns the
+    smallest J of the elements that hold them (≤ 0: stopped there).
+
+    ``u``, ``new``: every node at tⁿ and tⁿ⁺¹ (the film nodes' rows of ``new`` are overwritten with
+    theirs); ``x``, ``xp``: the film nodes' positions now and a substep before (``xp`` is the state's);
+    ``U``, ``ue``, ``Rf``, ``G``: work rows; ``R``: the step's force without the film, held; ``coef``: the
+    substep's (a, b, c, hold); ``field``: (U_i, ΔU, w) with the elements seeing U − (U_i + w_j ΔU) at
+    substep j; ``tis``: the tissue's element data; ``film_args``: the film rule's arguments after (u, R),
+    whose breaking points are the array ``Z``, refilled from ``Zs[j]`` each substep.
+    """
+    a, b, c, hold = coef
+    Ua, Ud, w = field
+    conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, energy, ptr, slot = tis
+    m = w.shape[0]
+    jmin = np.inf
+    for i in range(fast.shape[0]):
         for d in range(3):
-            x[i, d] = u[rows[i], d]
-
-
-@njit(cache=True, boundscheck=False)
-def _interpolate_rows(u0, u1, w, rows, out):  # pragma: no cover - compiled
-    """out[n] = u0[n] + w (u1[n] − u0[n]) for n in rows."""
-    for i in range(rows.shape[0]):
-        n = rows[i]
+            x[i, d] = u[fast[i], d]
+    for j in range(m):
+        s = j / m
+        for k in range(ring.shape[0]):            # the other nodes of the film nodes' elements: interpolated
+            n = ring[k]
+            for d in range(3):
+                U[n, d] = u[n, d] + s * (new[n, d] - u[n, d])
+        for i in range(fast.shape[0]):
+            for d in range(3):
+                U[fast[i], d] = x[i, d]
+        if tissue_on:
+            wj = w[j]
+            for k in range(ring.shape[0]):
+                n = ring[k]
+                for d in range(3):
+                    ue[n, d] = U[n, d] - (Ud[n, d] * wj + Ua[n, d])
+            jm = _boundary_forces(elems, fast, ue, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, energy, ptr,
+                                  slot, R, G)
+            if not jm > 0.0:
+                return jm
+            jmin = min(jmin, jm)
+        else:
+            for i in range(fast.shape[0]):
+                for d in range(3):
+                    G[i, d] = R[fast[i], d]
+        Z[:] = Zs[j]
+        _film_step(U, Rf, *film_args)
+        _fine_update(fast, G, Rf, a, b, c, hold, x, xp)
+    for i in range(fast.shape[0]):
         for d in range(3):
-            out[n, d] = u0[n, d] + w * (u1[n, d] - u0[n, d])
-
-
-@njit(cache=True, boundscheck=False)
-def _put_rows(x, rows, out):  # pragma: no cover - compiled
-    """out[rows[i]] = x[i]."""
-    for i in range(rows.shape[0]):
-        for d in range(3):
-            out[rows[i], d] = x[i, d]
+            new[fast[i], d] = x[i, d]
+    return jmin
 
 
 @njit(cache=True, boundscheck=False)

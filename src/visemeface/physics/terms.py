@@ -60,6 +60,14 @@ class Tissue(Term):
         s = self.solver
         return u, s.dhdx, s.force_volume, s.gamma, s.hourglass_stiffness
 
+    def segment(self, times, step: int = 0) -> tuple:
+        """For substeps at ``times`` within step ``step`` (:mod:`visemeface.physics.integrator`): (a, d, w, geometry)
+        with the displacement the elements see u − (a + w_j d) at ``times[j]``; here a = d = 0 and the rest geometry."""
+        s = self.solver
+        if getattr(self, "_zero", None) is None:
+            self._zero = np.zeros(s.mesh.nodes.shape)
+        return self._zero, self._zero, np.zeros(len(times)), (s.dhdx, s.force_volume, s.gamma, s.hourglass_stiffness)
+
     def element_forces(self, u, t: float = 0.0, step: int = 0) -> None:
         """Fill ``solver._fe`` (zeros when switched off) and ``solver._jac`` for ``u``."""
         s = self.solver
@@ -140,6 +148,17 @@ class ActiveTissue(Tissue):
         a, d, w = self.drive.target_segment(t)
         _minus_lerp(u.ravel(), a.ravel(), d.ravel(), w, self._uY.reshape(-1))
         return (self._uY,) + self._cur[1]
+
+
+    def segment(self, times, step: int = 0) -> tuple:
+        """(U_i, ΔU, w_j, geometry): the field U(times[j]) = U_i + w_j ΔU and the natural shape's geometry (as
+        refreshed at ``step``); the times lie within one track segment (a step divides a frame)."""
+        self._refresh(step, times[0])
+        a, d, _ = self.drive.target_segment(times[0])
+        w = np.array([self.drive.target_segment(t)[2] for t in times])
+        if self.drive.target_segment(times[-1])[0] is not a:
+            raise ValueError("substeps cross a track frame: the step must divide a frame")
+        return a, d, w, self._cur[1]
 
 
 class MuscleLoads(Term):
