@@ -423,3 +423,32 @@ def test_the_fused_step_is_the_element_loop_then_the_update_bit_for_bit(parallel
         assert np.array_equal(fused.displacement, separate.displacement)
         assert fused.strain_energy == separate.strain_energy and fused.kinetic_energy == separate.kinetic_energy
     assert np.abs(runs[True][-1].displacement - u0).max() > 1e-6
+
+
+@pytest.mark.parametrize("backend", ["numba", "numpy"])
+def test_a_run_is_the_same_bits_whatever_the_meshs_node_numbering(backend):
+    # run() steps the nodes numbered as the elements first touch them (each thread then loads and steps
+    # the nodes of its own elements) and gives the frames back in the mesh's numbering: a mesh with its
+    # nodes shuffled, its loads, fixed and prescribed nodes renamed alike, gives the very same frames.
+    from visemeface.physics.hexmesh import first_touch_order
+    m = _distorted_box(shape=(4, 3, 2), size=(0.02, 0.015, 0.01), amount=0.2, seed=3)
+    perm = np.random.default_rng(4).permutation(m.n_nodes)        # new id -> old id
+    rank = np.empty_like(perm)
+    rank[perm] = np.arange(m.n_nodes)
+    shuffled = HexMesh(m.nodes[perm], rank[m.hexes], material=m.material)
+    u0 = np.random.default_rng(5).normal(0, 2e-4, (m.n_nodes, 3))
+    runs = []
+    for mesh, name in ((m, np.arange(m.n_nodes)), (shuffled, rank)):
+        sets = {k: name[v] for k, v in m.node_sets.items()}
+        jaw = prescribed_rotation(mesh, sets["zmin"], [0, 0, -0.01], [1, 0, 0], lambda t: 5.0 * t)
+        solver = TLEDSolver(mesh, SOFT_TISSUE, dt=5e-7, damping=80.0, fixed=sets["xmin"], prescribed=[jaw],
+                            forces=[(sets["xmax"], lambda t: [0.0, 0.02 * t, 0.0]),
+                                    (sets["ymax"], lambda t: np.full((len(sets["ymax"]), 3), 0.01 * t))],
+                            backend=backend)
+        frames = list(solver.run(60, output_every=20, initial_displacement=u0[np.argsort(name)]))
+        runs.append([(f.displacement[name], f.velocity[name], f.kinetic_energy, f.strain_energy) for f in frames])
+    for a, b in zip(*runs):
+        assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1]) and a[2] == b[2] and a[3] == b[3]
+    assert np.abs(runs[0][-1][0] - u0).max() > 1e-6
+    order = first_touch_order(m.hexes, m.n_nodes)
+    assert sorted(order.tolist()) == list(range(m.n_nodes)) and order[0] == m.hexes[0, 0]

@@ -390,3 +390,18 @@ def check_quality(mesh: HexMesh, max_aspect: float | None = 20.0, min_scaled_jac
                 f"(nodes {mesh.hexes[e].tolist()}) has aspect ratio {q['aspect_ratio'][e]:.3g} "
                 f"> {max_aspect:g}")
     return q
+
+
+def first_touch_order(hexes, n_nodes: int) -> np.ndarray:
+    """Nodes in the order the elements first touch them (then any node no element uses): new → old ids.
+
+    Numbered so, the nodes a contiguous run of elements uses are themselves nearly contiguous, so a
+    thread that computes a block of elements also gathers and steps the nodes they load (the TLED
+    solver's threaded step: on an extruded sheet numbered layer by layer every thread otherwise reads
+    forces the other wrote, 2 threads ran 1.66x faster than one; numbered so, 1.98x).
+    """
+    flat = np.asarray(hexes, dtype=np.int64).ravel()
+    _, first = np.unique(flat, return_index=True)          # first slot that touches each used node
+    used = flat[np.sort(first)]
+    rest = np.setdiff1d(np.arange(n_nodes), used)
+    return np.concatenate([used, rest]).astype(np.int64)

@@ -732,8 +732,8 @@ class TLEDSolver:
 
     # -- kernels ------------------------------------------------------------
 
-    def _element_forces(self, u: np.ndarray, want_energy: bool) -> None:
-        self._elem_kernel(u, self.conn, self.dhdx, self.force_volume, self.gamma, self.hourglass_stiffness,
+    def _element_forces(self, u: np.ndarray, want_energy: bool, conn=None) -> None:
+        self._elem_kernel(u, self.conn if conn is None else conn, self.dhdx, self.force_volume, self.gamma, self.hourglass_stiffness,
                           self.mu, self.K, self._fe, self._jac, self._fdef, self.element_hook is not None,
                           self._energy, want_energy)
 
@@ -790,22 +790,53 @@ class TLEDSolver:
                                  f"({self.mesh.n_elements},) scale factors or None")
             self._fe *= scale[:, None, None]
 
-    def _external(self, t: float) -> np.ndarray:
-        R = self._R
-        if self._all_nodes_force:              # one load on every node, in order: no indexing
-            np.copyto(R, self._values(self.forces[0][1], t, len(R), "forces[0]"))
-        elif len(self.forces) == 1:            # unique ids: only they are ever non-zero
-            ids, f = self.forces[0]
+    def _external(self, t: float, run=None) -> np.ndarray:
+        """R(t) of the loads, in the user's node numbering or the run's (``run``: :meth:`_run_numbering`)."""
+        forces, R = (self.forces, self._R) if run is None else (run.forces, run.R)
+        if len(forces) == 1 and len(forces[0][0]) == len(R) and self._all_nodes_force:
+            v = self._values(forces[0][1], t, len(R), "forces[0]")   # one load on every node
+            if run is None or v.ndim == 1:
+                np.copyto(R, v)
+            else:
+                R[run.rank] = v
+        elif len(forces) == 1:            # unique ids: only they are ever non-zero
+            ids, f = forces[0]
             R[ids] = self._values(f, t, len(ids), "forces[0]")
-        elif self.forces:
-            R[self._force_nodes] = 0.0
-            for i, (ids, f) in enumerate(self.forces):
+        elif forces:
+            R[self._force_nodes if run is None else run.force_nodes] = 0.0
+            for i, (ids, f) in enumerate(forces):
                 R[ids] += self._values(f, t, len(ids), f"forces[{i}]")
         return R
 
-    def _impose(self, u: np.ndarray, t: float) -> None:
-        for i, (ids, f) in enumerate(self.prescribed):
+    def _impose(self, u: np.ndarray, t: float, run=None) -> None:
+        for i, (ids, f) in enumerate(self.prescribed if run is None else run.prescribed):
             u[ids] = self._values(f, t, len(ids), f"prescribed[{i}]")
+
+    def _run_numbering(self):
+        """The arrays :meth:`run` steps, with the nodes numbered in the order the elements first touch
+        them (:func:`~visemeface.physics.hexmesh.first_touch_order`; cached). Elements keep their order,
+        and each node's forces are summed in the same order, so the run gives the same bits in any
+        numbering; the frames are given back in the mesh's."""
+        if getattr(self, "_run", None) is None:
+            from types import SimpleNamespace
+
+            from visemeface.physics.hexmesh import first_touch_order
+            n = self.mesh.n_nodes
+            order = first_touch_order(self.conn, n)
+            rank = np.empty(n, dtype=np.int64)
+            rank[order] = np.arange(n)
+            conn = np.ascontiguousarray(rank[self.conn])
+            flat = conn.ravel()
+            ptr = np.zeros(n + 1, dtype=np.int64)
+            np.cumsum(np.bincount(flat, minlength=n), out=ptr[1:])
+            self._run = SimpleNamespace(
+                order=order, rank=rank, conn=conn, flat=flat, ptr=ptr,
+                slot=np.ascontiguousarray(np.argsort(flat, kind="stable").astype(np.int64)),
+                A=np.ascontiguousarray(self._A[order]), B=np.ascontiguousarray(self._B[order]),
+                C=np.ascontiguousarray(self._C[order]), free=self.free[order], mass=self.mass[order],
+                forces=[(rank[ids], f) for ids, f in self.forces], force_nodes=rank[self._force_nodes],
+                prescribed=[(rank[ids], f) for ids, f in self.prescribed], R=np.zeros((n, 3)))
+        return self._run
 
     # -- time stepping ------------------------------------------------------
 
@@ -827,21 +858,22 @@ class TLEDSolver:
         if n_steps < 0 or output_every < 1:
             raise InputError(f"need n_steps >= 0 and output_every >= 1, got {n_steps}, {output_every}")
         n, dt = self.mesh.n_nodes, self.dt
+        o = self._run_numbering()                     # the run's node numbering; frames in the mesh's
         u = np.zeros((n, 3)) if initial_displacement is None else \
-            np.array(np.broadcast_to(np.asarray(initial_displacement, dtype=np.float64), (n, 3)))
-        u *= self.free
-        self._impose(u, 0.0)
+            np.array(np.broadcast_to(np.asarray(initial_displacement, dtype=np.float64), (n, 3))[o.order])
+        u *= o.free
+        self._impose(u, 0.0, o)
         v0 = np.zeros((n, 3)) if initial_velocity is None else \
-            np.broadcast_to(np.asarray(initial_velocity, dtype=np.float64), (n, 3))
-        self._element_forces(u, False)
+            np.broadcast_to(np.asarray(initial_velocity, dtype=np.float64), (n, 3))[o.order]
+        self._element_forces(u, False, o.conn)
         self._check(0, 0.0)
         if self.element_hook is not None:
             self._apply_hook(0, 0.0)
         force0 = np.zeros((n, 3))
-        _gather_np(self._fe.reshape(-1, 3), self._conn_flat, force0)
-        accel = (self._external(0.0) - force0) / self.mass[:, None]
-        u_prev = np.ascontiguousarray((u - dt * v0 + 0.5 * dt * dt * accel) * self.free)
-        self._impose(u_prev, 0.0)
+        _gather_np(self._fe.reshape(-1, 3), o.flat, force0)
+        accel = (self._external(0.0, o) - force0) / o.mass[:, None]
+        u_prev = np.ascontiguousarray((u - dt * v0 + 0.5 * dt * dt * accel) * o.free)
+        self._impose(u_prev, 0.0, o)
         u_new = np.zeros((n, 3))
         fe_flat = self._fe.reshape(-1, 3)
         numba_backend = self.backend == "numba"
@@ -850,29 +882,28 @@ class TLEDSolver:
             t = step * dt
             output = step % output_every == 0
             if fused:                          # the whole step in one compiled call (see _step_nb)
-                R = self._external(t)
-                jmin = self._step_kernel(u, self.conn, self.dhdx, self.force_volume, self.gamma,
+                R = self._external(t, o)
+                jmin = self._step_kernel(u, o.conn, self.dhdx, self.force_volume, self.gamma,
                                          self.hourglass_stiffness, self.mu, self.K, self._fe, self._jac,
-                                         self._fdef, self._energy, output, self._ptr, self._slot, R, self._A,
-                                         self._B, self._C, u, u_prev, u_new)
+                                         self._fdef, self._energy, output, o.ptr, o.slot, R, o.A, o.B, o.C,
+                                         u, u_prev, u_new)
                 if not jmin > 0.0:
                     self._check(step, t)
             else:
-                self._element_forces(u, output)
+                self._element_forces(u, output, o.conn)
                 self._check(step, t)
                 if self.element_hook is not None:
                     self._apply_hook(step, t)
-                R = self._external(t)
+                R = self._external(t, o)
                 if numba_backend:
-                    self._int_kernel(fe_flat, self._ptr, self._slot, R, self._A, self._B, self._C, u, u_prev,
-                                     u_new)
+                    self._int_kernel(fe_flat, o.ptr, o.slot, R, o.A, o.B, o.C, u, u_prev, u_new)
                 else:
-                    _gather_np(fe_flat, self._conn_flat, force0)
-                    np.multiply(self._A, R - force0, out=u_new)
-                    u_new += self._B * u + self._C * u_prev
-            self._impose(u_new, t + dt)
+                    _gather_np(fe_flat, o.flat, force0)
+                    np.multiply(o.A, R - force0, out=u_new)
+                    u_new += o.B * u + o.C * u_prev
+            self._impose(u_new, t + dt, o)
             if output:
                 v = (u_new - u_prev) / (2.0 * dt)
-                yield Frame(step, t, u.copy(), float(0.5 * np.einsum("n,ni,ni->", self.mass, v, v)),
-                            float(self._energy.sum()), v)
+                yield Frame(step, t, u[o.rank], float(0.5 * np.einsum("n,ni,ni->", o.mass, v, v)),
+                            float(self._energy.sum()), v[o.rank])
             u_prev, u, u_new = u, u_new, u_prev
