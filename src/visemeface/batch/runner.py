@@ -168,7 +168,9 @@ def _submit(todo, outdir: Path, client, workers, force, show_progress, rows, on_
                 bar.update(1)
                 if on_result is not None:
                     on_result(row)
-    except BaseException:
+    except BaseException as e:
+        if own and not isinstance(e, Exception):     # interrupted: our one line says so; the scheduler's
+            _quiet_dask()                           # "couldn't gather keys" for the cancelled clips is noise
         client.cancel(futures)
         raise
     finally:
@@ -177,6 +179,13 @@ def _submit(todo, outdir: Path, client, workers, force, show_progress, rows, on_
             client.close()
             cluster.close()
     _remove_stale(outdir, [job for _, job in todo])
+
+
+def _quiet_dask() -> None:
+    """Silence this process's Dask loggers (the scheduler of a local cluster runs here)."""
+    for name in list(logging.root.manager.loggerDict):
+        if name == "distributed" or name.startswith("distributed."):
+            logging.getLogger(name).setLevel(logging.CRITICAL + 1)
 
 
 def _remove_stale(outdir: Path, jobs: Iterable[Job]) -> None:
