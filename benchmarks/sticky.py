@@ -32,17 +32,19 @@ def emit(**kw):
     print(json.dumps(kw), flush=True)
 
 
-def bench_fem_face(seconds: float, threads: int, dt: float | None = None) -> float:
+def bench_fem_face(seconds: float, threads: int, dt: float | None = None, seam_elements: int | None = None) -> float:
     from visemeface.face.procedural import default_face
     from visemeface.muscles.rig import MuscleRig
     from visemeface.physics.drive import PhysicsSettings, StickySimulation, scenario_track
     from visemeface.physics.face_model import build_fem_face
     from visemeface.runtime import set_threads
 
+    from visemeface.face.refine import refine_lip_seam
+
     set_threads(threads)
     face = default_face()
-    rig = MuscleRig.from_file(face)
-    fem = build_fem_face(face)
+    rig = MuscleRig.from_file(face if seam_elements is None else refine_lip_seam(face, seam_elements))
+    fem = build_fem_face(face, seam_elements=seam_elements)
     track = scenario_track("open", rig.names, fps=60)
     track = track.iloc[: int(round(seconds * 60)) + 1]
     sim = StickySimulation(fem, rig, track, settings=PhysicsSettings(dt=dt, threads=threads))
@@ -57,7 +59,8 @@ def bench_fem_face(seconds: float, threads: int, dt: float | None = None) -> flo
     emit(benchmark="fem_face", threads=threads, nodes=fem.mesh.n_nodes, hexahedra=fem.mesh.n_elements,
          saliva=len(fem.saliva), film_slabs=getattr(getattr(sim, "film", None), "n_elements", None), dt=sim.dt, simulated_s=round(simulated, 4), wall_s=round(wall, 2),
          wall_per_simulated_s=round(wall / simulated, 1), steps_per_s=round(n * sim.steps_per_frame / wall),
-         target_wall_per_simulated_s=10, stable_limit=sim.stability["dt"], load_average=os.getloadavg()[0])
+         target_wall_per_simulated_s=10, stable_limit=sim.stability["dt"],
+         element_bounds=sim.stability["element"], seam_elements=seam_elements, load_average=os.getloadavg()[0])
     return wall / simulated
 
 
@@ -103,11 +106,13 @@ def main(argv=None):
     ap.add_argument("--dt", default="auto,1e-5", help="time steps: 'auto' (the stable limit) and/or seconds "
                     "(default auto,1e-5: after and before issue 17)")
     ap.add_argument("--skip-speech", action="store_true")
+    ap.add_argument("--seam-elements", type=int, default=None,
+                    help="fem_face: refine the lips to this many tissue elements along the seam (build_fem_face)")
     args = ap.parse_args(argv)
     counts = [int(x) for x in args.threads.split(",")]
     steps = [None if x == "auto" else float(x) for x in args.dt.split(",")]
     for n in counts:
-        per = {dt: bench_fem_face(args.seconds, n, dt) for dt in steps}
+        per = {dt: bench_fem_face(args.seconds, n, dt, args.seam_elements) for dt in steps}
         if None in per and len(per) > 1:
             for dt, w in per.items():
                 if dt is not None:
