@@ -316,20 +316,8 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
     if len(missing):
         raise InputError(f"lip seam vertex {int(missing[0])} is on no tissue quad of the lower face")
     pairs = _gapped_pairs(face, pairs, min_gap)
-    # Paired seam vertices share one extrusion direction so each saliva element is a slab.
-    normals = smoothed_normals(face.vertices, quads, NORMAL_SMOOTHING)
-    common = normals[pairs[:, 0]] + normals[pairs[:, 1]]
-    common /= np.linalg.norm(common, axis=1, keepdims=True)
-    normals[pairs[:, 0]] = common
-    normals[pairs[:, 1]] = common
-    depth, lip_w = _lip_depth(face, quads, thickness, lip_thickness)
-    tissue = extrude_quads(face.vertices, quads, depth, layers=layers, material=TISSUE, normals=normals,
-                           check=False)
+    tissue, depth_fraction, lip_w = _tissue(face, quads, pairs, thickness, layers, lip_thickness, saliva_depth)
     S = len(tissue.surface_vertices)
-    depth_fraction = _layer_nodes(tissue, normals, depth, layers, saliva_depth)
-    if layers >= 2:
-        tissue.nodes = relax_bone_side(tissue.nodes, tissue.hexes, S, layers)
-    lip_w = lip_w[tissue.surface_vertices]
     if seam_elements is not None:
         face, tissue, depth_fraction, lip_w = _refined(face, mask, tissue, depth_fraction, lip_w, seam_elements)
         pairs, S = _gapped_pairs(face, seam_pairs(face), min_gap), len(tissue.surface_vertices)
@@ -359,6 +347,23 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
                    seam_pairs=pairs, seam_s=seam_s, mouth_width=width,
                    depth_fraction=depth_fraction, lip_weight=lip_w,
                    corner_hexes=corners, corner_s=corner_s)
+
+
+def _tissue(face: FaceMesh, quads, pairs, thickness, layers: int, lip_thickness, saliva_depth):
+    """The extruded tissue (bone side relaxed), its depth fractions and lip weight per surface node."""
+    # Paired seam vertices share one extrusion direction so each saliva element is a slab.
+    normals = smoothed_normals(face.vertices, quads, NORMAL_SMOOTHING)
+    common = normals[pairs[:, 0]] + normals[pairs[:, 1]]
+    common /= np.linalg.norm(common, axis=1, keepdims=True)
+    normals[pairs[:, 0]] = common
+    normals[pairs[:, 1]] = common
+    depth, lip_w = _lip_depth(face, quads, thickness, lip_thickness)
+    tissue = extrude_quads(face.vertices, quads, depth, layers=layers, material=TISSUE, normals=normals,
+                           check=False)
+    depth_fraction = _layer_nodes(tissue, normals, depth, layers, saliva_depth)
+    if layers >= 2:
+        tissue.nodes = relax_bone_side(tissue.nodes, tissue.hexes, len(tissue.surface_vertices), layers)
+    return tissue, depth_fraction, lip_w[tissue.surface_vertices]
 
 
 def _refined(face: FaceMesh, mask, tissue, depth_fraction, lip_w, elements: int):
