@@ -33,17 +33,20 @@ def emit(**kw):
     print(json.dumps(kw), flush=True)
 
 
-def bench_fem_face(seconds: float, threads: int, dt: float | None = None, multirate: bool = True) -> float:
+def bench_fem_face(seconds: float, threads: int, dt: float | None = None, multirate: bool = True,
+                   seam_elements: int | None = None) -> float:
     from visemeface.face.procedural import default_face
     from visemeface.muscles.rig import MuscleRig
     from visemeface.physics.drive import PhysicsSettings, StickySimulation, scenario_track
     from visemeface.physics.face_model import build_fem_face
     from visemeface.runtime import set_threads
 
+    from visemeface.face.refine import refine_lip_seam
+
     set_threads(threads)
     face = default_face()
-    rig = MuscleRig.from_file(face)
-    fem = build_fem_face(face)
+    rig = MuscleRig.from_file(face if seam_elements is None else refine_lip_seam(face, seam_elements))
+    fem = build_fem_face(face, seam_elements=seam_elements)
     track = scenario_track("open", rig.names, fps=60)
     track = track.iloc[: int(round(seconds * 60)) + 1]
     sim = StickySimulation(fem, rig, track, settings=PhysicsSettings(dt=dt, threads=threads, multirate=multirate))
@@ -59,7 +62,8 @@ def bench_fem_face(seconds: float, threads: int, dt: float | None = None, multir
          saliva=len(fem.saliva), film_slabs=getattr(getattr(sim, "film", None), "n_elements", None), dt=sim.dt,
          substeps=getattr(sim, "substeps", 1), simulated_s=round(simulated, 4), wall_s=round(wall, 2),
          wall_per_simulated_s=round(wall / simulated, 1), steps_per_s=round(n * sim.steps_per_frame / wall),
-         target_wall_per_simulated_s=10, stable_limit=sim.stability["dt"], load_average=os.getloadavg()[0])
+         target_wall_per_simulated_s=10, stable_limit=sim.stability["dt"],
+         element_bounds=sim.stability["element"], seam_elements=seam_elements, load_average=os.getloadavg()[0])
     return wall / simulated
 
 
@@ -105,14 +109,16 @@ def main(argv=None):
     ap.add_argument("--dt", default="auto,single,1e-5", help="time steps: 'auto' (multi-rate at the stable "
                     "limits), 'single' (one step, the film's limit) and/or seconds (default auto,single,1e-5)")
     ap.add_argument("--skip-speech", action="store_true")
+    ap.add_argument("--seam-elements", type=int, default=None,
+                    help="fem_face: refine the lips to this many tissue elements along the seam (build_fem_face)")
     args = ap.parse_args(argv)
     counts = [int(x) for x in args.threads.split(",")]
     steps = args.dt.split(",")
 
     def run(n, x):
         if x in ("auto", "single"):
-            return bench_fem_face(args.seconds, n, None, multirate=x == "auto")
-        return bench_fem_face(args.seconds, n, float(x), multirate=False)
+            return bench_fem_face(args.seconds, n, None, multirate=x == "auto", seam_elements=args.seam_elements)
+        return bench_fem_face(args.seconds, n, float(x), multirate=False, seam_elements=args.seam_elements)
 
     for n in counts:
         per = {x: run(n, x) for x in steps}

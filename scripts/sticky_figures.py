@@ -250,6 +250,8 @@ def main():
     ap.add_argument("--strand", type=float, default=0.0, help="cohesive strand length, m (0: none)")
     ap.add_argument("--film-corners", action="store_true",
                     help="carry the film into the mouth corners (default: it ends at the last seam pair, a free end)")
+    ap.add_argument("--seam-elements", type=int, default=None,
+                    help="refine the lips to at least this many tissue elements along the seam (build_fem_face)")
     ap.add_argument("--image", default="sticky_zipper.png", help="zipper picture's name in docs/images/")
     ap.add_argument("--ramp", type=float, default=0.0,
                     help="zipper/glue03: seconds the jaw takes to open (0: seed scenario open-once)")
@@ -263,8 +265,10 @@ def main():
     args = ap.parse_args()
     from visemeface.runtime import set_threads
     set_threads(args.threads)
+    from visemeface.face.refine import refine_lip_seam
     face = default_face(resolution=args.resolution)
-    fem, rig = build_fem_face(face), MuscleRig.from_file(face)
+    k = args.seam_elements
+    fem, rig = build_fem_face(face, seam_elements=k), MuscleRig.from_file(face if k is None else refine_lip_seam(face, k))
     only = set(args.only.split(","))
     from visemeface.physics.saliva import SalivaParams
     common = {"lip_bone": args.lip_bone, "posture_hz": args.posture_hz, "muscles": args.muscles,
@@ -273,7 +277,7 @@ def main():
     common["saliva"] = SalivaParams(soften=args.soften, viscosity=args.viscosity, strand=args.strand, **extra)
     global RAMP, IMAGE
     RAMP, IMAGE = args.ramp, args.image
-    emit(figure="settings", resolution=args.resolution, fps=args.fps, soften=args.soften, viscosity=args.viscosity,
+    emit(figure="settings", resolution=args.resolution, seam_elements=k, fps=args.fps, soften=args.soften, viscosity=args.viscosity,
          ramp=args.ramp, rupture_time=common["saliva"].rupture_time, strand=args.strand,
          **{k: v for k, v in common.items() if k != "saliva"})
     if "counts" in only:

@@ -114,3 +114,20 @@ def test_bone_side_relaxation_mends_flat_corner_elements():
     np.testing.assert_array_equal(after.mesh.nodes[:L * S], before.mesh.nodes[:L * S])
     moved = np.linalg.norm(after.mesh.nodes - before.mesh.nodes, axis=1)
     assert 0 < (moved > 0).sum() < 0.2 * S          # only around the corners
+
+
+def test_seam_elements_slice_the_same_tissue_finer_along_the_lips(face, fem):
+    from visemeface.face.refine import refine_lip_seam
+    fine = fm.build_fem_face(face, seam_elements=48)
+    assert len(fine.saliva) >= 48 and len(fine.seam_pairs) == len(fine.saliva) + 1
+    assert np.allclose(fine.rest_gaps, fine.rest_gaps[0])        # the uniform rest gap, pair by pair
+    assert fine.face.n_vertices == refine_lip_seam(face, 48).n_vertices   # a rig on the refined face fits
+
+    def volume(m):
+        from visemeface.physics.saliva import film_gradients
+        return film_gradients(m.mesh.nodes[m.mesh.hexes[m.tissue]])[1].sum()
+    # each new hexahedron is a slice of an old one: the same tissue, the same worst shape
+    assert volume(fine) == pytest.approx(volume(fem), rel=1e-9)
+    q, q0 = element_quality(fine.mesh), element_quality(fem.mesh)
+    assert q["scaled_jacobian"][fine.tissue].min() == pytest.approx(q0["scaled_jacobian"][fem.tissue].min(), rel=1e-6)
+    assert fine.lip_weight.max() == pytest.approx(fem.lip_weight.max())

@@ -79,6 +79,43 @@ def test_the_film_runs_into_the_mouth_corners_where_the_lips_share_a_node():
     assert film.rest_gap[corner].max() < film.rest_gap[~corner].min()
 
 
+@pytest.mark.slow
+def test_lips_refined_along_the_seam_unzip_the_default_face_from_the_centre():
+    """On the default face (12 tissue elements along the seam) the cohesive film parts from its free
+    ends near the corners (or, carried into them, holds to jaw 0.35): its 48 slabs share the four
+    edge nodes of their lip element. With the lips refined to one tissue element per slab
+    (``seam_elements=48``) the same film, ending at the last seam pair, unzips from the centre
+    while the jaw is held."""
+    from visemeface.face.procedural import default_face
+    from visemeface.face.refine import refine_lip_seam
+    from visemeface.muscles.rig import MuscleRig
+    from visemeface.physics.face_model import build_fem_face
+    from visemeface.runtime import set_threads
+    set_threads(1)
+    face = default_face()
+    fem, rig = build_fem_face(face, seam_elements=48), MuscleRig.from_file(refine_lip_seam(face, 48))
+    track = drive.ramp_track(rig.names, FPS, 0.05, 0.35, 0.75, 0.35)
+    settings = drive.PhysicsSettings(saliva=SalivaParams(rupture_time=RUPTURE_TIME), threads=1)
+    out = {}
+    for physics in ("sticky", "elastic"):
+        sim = drive.StickySimulation(fem, rig, track, physics=physics, settings=settings)
+        assert sim.film.refine == 1                                     # one slab per tissue element
+        out[physics] = [(fr.vertices, fr.saliva["film_open_span"], sim.film.front_gaps(fr.displacement)
+                         - sim.film.rest_gap) for fr in sim.frames()]
+    spans = np.array([f[1] for f in out["sticky"]])
+    k0 = int(np.flatnonzero(spans > 0)[0])
+    k_full = int(np.flatnonzero(spans >= 0.95 * spans.max())[0])
+    assert abs(sim.film.s[np.argmax(out["sticky"][k0][2])]) < 0.15       # first opening at the centre
+    assert len(np.unique(np.round(spans[k0:k_full + 1], 4))) >= 8        # many widths ...
+    assert (k_full - k0) / FPS >= 0.2 and np.all(np.diff(spans[k0:k_full + 1]) >= 0)   # ... over >= 0.2 s
+    es = np.array([f[1] for f in out["elastic"]])
+    e0 = int(np.flatnonzero(es > 0)[0])
+    assert e0 < k0 and es[e0 + 2] >= 0.8 * es.max() and spans.max() >= 0.95 * es.max()
+    lips = np.unique(np.concatenate([fem.face.region("upper_lip"), fem.face.region("lower_lip")]))
+    d = out["sticky"][-1][0][lips] - out["elastic"][-1][0][lips]
+    assert np.sqrt(np.mean(np.sum(d * d, axis=1))) <= 0.01 * fem.mouth_width   # the same open mouth at the end
+
+
 def _held(params, lam, steps, glue=0.08):
     from test_sticky import _box, _films, _step, _stretched
     film, X, st = _films(glue, params)

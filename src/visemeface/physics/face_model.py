@@ -33,7 +33,9 @@ import numpy as np
 
 from visemeface.errors import InputError
 from visemeface.face.mesh import FaceMesh
-from visemeface.physics.hexmesh import HexMesh, extrude_quads, vertex_normals
+from visemeface.physics.hexmesh import HexMesh, extrude_quads
+from visemeface.physics.hexmesh import smooth_on_quads as _smooth_on_quads
+from visemeface.physics.hexmesh import smoothed_normals
 from visemeface.physics.bone import relax_bone_side
 from visemeface.physics.openings import seam_openings  # noqa: F401  (re-exported)
 
@@ -247,50 +249,10 @@ def fem_quads(face: FaceMesh, top: float | None = None, nose_radius: float | Non
     return ~bad[face.quads].any(axis=1)
 
 
-def smoothed_normals(vertices, quads, iterations: int = NORMAL_SMOOTHING) -> np.ndarray:
-    """Outward unit normals averaged over the quad graph, for extrusion.
-
-    Each pass replaces a normal by ½ (itself + the mean of its edge
-    neighbours'), a diffusion that widens the curvature radius the extrusion
-    sees: raw normals cross inside the lips and chin (radius < tissue depth)
-    and invert elements; 50 passes keep every default-face element's scaled
-    Jacobian above 0.3 at 12 mm.
-    """
-    import scipy.sparse as sp
-    v = np.asarray(vertices, dtype=np.float64)
-    q = np.asarray(quads, dtype=np.int64)
-    n = vertex_normals(v, q)
-    a = np.concatenate([q[:, i] for i in range(4)])
-    b = np.concatenate([q[:, (i + 1) % 4] for i in range(4)])
-    adj = sp.coo_matrix((np.ones(2 * len(a)), (np.r_[a, b], np.r_[b, a])), shape=(len(v), len(v))).tocsr()
-    adj.data[:] = 1.0
-    deg = np.maximum(np.asarray(adj.sum(axis=1)).ravel(), 1.0)
-    for _ in range(int(iterations)):
-        n = 0.5 * n + 0.5 * (adj @ n) / deg[:, None]
-    norm = np.linalg.norm(n, axis=1, keepdims=True)
-    return np.divide(n, norm, out=np.zeros_like(n), where=norm > 0)
-
-
-def _smooth_on_quads(values, quads, passes: int) -> np.ndarray:
-    """Average a per-vertex value with its quad-edge neighbours ``passes`` times."""
-    v = np.asarray(values, dtype=np.float64).copy()
-    q = np.asarray(quads)
-    a = np.concatenate([q[:, i] for i in range(4)])
-    b = np.concatenate([q[:, (i + 1) % 4] for i in range(4)])
-    for _ in range(passes):
-        acc = np.zeros_like(v)
-        cnt = np.zeros_like(v)
-        np.add.at(acc, a, v[b])
-        np.add.at(cnt, a, 1.0)
-        used = cnt > 0
-        v[used] = 0.5 * v[used] + 0.5 * acc[used] / cnt[used]
-    return v
-
-
 def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: int = LAYERS,
                    top: float | None = None, saliva_gap: float | None = REST_GAP,
                    saliva_depth: float | None = SALIVA_DEPTH, lip_thickness: float | None = LIP_THICKNESS,
-                   min_gap: float = 3e-4) -> FEMFace:
+                   min_gap: float = 3e-4, seam_elements: int | None = None) -> FEMFace:
     """Extrude the lower face into hexahedra and bridge the lips with saliva elements.
 
     Parameters
@@ -331,6 +293,12 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
     min_gap : float
         Smallest rest gap (m) accepted between paired seam vertices: thinner
         saliva would force a time step under the seed's 1e-5 s.
+    seam_elements : int or None
+        At least this many tissue elements along the lip seam
+        (:func:`visemeface.face.refine.refine_lip_seam`: the quad strips across the seam split,
+        conformingly), their extrusion (normals, depth, lip weight) interpolated from the
+        unsplit face's so the tissue is the same, only finer along the mouth. The model's
+        ``face`` is the refined one; a rig for it is ``MuscleRig.from_file(refine_lip_seam(face, n))``.
 
     Returns
     -------
@@ -348,19 +316,11 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
     if len(missing):
         raise InputError(f"lip seam vertex {int(missing[0])} is on no tissue quad of the lower face")
     pairs = _gapped_pairs(face, pairs, min_gap)
-    # Paired seam vertices share one extrusion direction so each saliva element is a slab.
-    normals = smoothed_normals(face.vertices, quads)
-    common = normals[pairs[:, 0]] + normals[pairs[:, 1]]
-    common /= np.linalg.norm(common, axis=1, keepdims=True)
-    normals[pairs[:, 0]] = common
-    normals[pairs[:, 1]] = common
-    depth, lip_w = _lip_depth(face, quads, thickness, lip_thickness)
-    tissue = extrude_quads(face.vertices, quads, depth, layers=layers, material=TISSUE, normals=normals,
-                           check=False)
+    tissue, depth_fraction, lip_w = _tissue(face, quads, pairs, thickness, layers, lip_thickness, saliva_depth)
     S = len(tissue.surface_vertices)
-    depth_fraction = _layer_nodes(tissue, normals, depth, layers, saliva_depth)
-    if layers >= 2:
-        tissue.nodes = relax_bone_side(tissue.nodes, tissue.hexes, S, layers)
+    if seam_elements is not None:
+        face, tissue, depth_fraction, lip_w = _refined(face, mask, tissue, depth_fraction, lip_w, seam_elements)
+        pairs, S = _gapped_pairs(face, seam_pairs(face), min_gap), len(tissue.surface_vertices)
     saliva_layers = 1 if (saliva_depth is not None and layers >= 2) else layers
     node_of = np.full(face.n_vertices, -1, dtype=np.int64)
     node_of[tissue.surface_vertices] = np.arange(S)
@@ -385,8 +345,42 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
                    saliva=saliva, saliva_pairs=np.tile(np.stack([a, b], axis=1), (saliva_layers, 1)),
                    saliva_s=np.tile(0.5 * (seam_s[a] + seam_s[b]), saliva_layers),
                    seam_pairs=pairs, seam_s=seam_s, mouth_width=width,
-                   depth_fraction=depth_fraction, lip_weight=lip_w[tissue.surface_vertices],
+                   depth_fraction=depth_fraction, lip_weight=lip_w,
                    corner_hexes=corners, corner_s=corner_s)
+
+
+def _tissue(face: FaceMesh, quads, pairs, thickness, layers: int, lip_thickness, saliva_depth):
+    """The extruded tissue (bone side relaxed), its depth fractions and lip weight per surface node."""
+    # Paired seam vertices share one extrusion direction so each saliva element is a slab.
+    normals = smoothed_normals(face.vertices, quads, NORMAL_SMOOTHING)
+    common = normals[pairs[:, 0]] + normals[pairs[:, 1]]
+    common /= np.linalg.norm(common, axis=1, keepdims=True)
+    normals[pairs[:, 0]] = common
+    normals[pairs[:, 1]] = common
+    depth, lip_w = _lip_depth(face, quads, thickness, lip_thickness)
+    tissue = extrude_quads(face.vertices, quads, depth, layers=layers, material=TISSUE, normals=normals,
+                           check=False)
+    depth_fraction = _layer_nodes(tissue, normals, depth, layers, saliva_depth)
+    if layers >= 2:
+        tissue.nodes = relax_bone_side(tissue.nodes, tissue.hexes, len(tissue.surface_vertices), layers)
+    return tissue, depth_fraction, lip_w[tissue.surface_vertices]
+
+
+def _refined(face: FaceMesh, mask, tissue, depth_fraction, lip_w, elements: int):
+    """The face refined along the lip seam (:func:`~visemeface.face.refine.lip_refinement`) and its tissue:
+    every node layer, depth fraction and lip weight interpolated from the unsplit tissue's, so each new
+    hexahedron is exactly a slice of an old one (the trilinear map restricted)."""
+    from visemeface.face.refine import lip_refinement
+    fine, P, parent = lip_refinement(face, elements)
+    quads = fine.quads[mask[parent]]
+    layers = len(depth_fraction) - 1
+    out = extrude_quads(fine.vertices, quads, 1.0, layers=layers, material=TISSUE, check=False)
+    Ps = P[out.surface_vertices][:, tissue.surface_vertices]
+    if Ps.shape[0] and np.any(np.abs(np.asarray(Ps.sum(axis=1)).ravel() - 1.0) > 1e-9):
+        raise InputError("a refined lip vertex lies on an edge outside the face's tissue")
+    S = len(tissue.surface_vertices)
+    out.nodes = np.concatenate([Ps @ tissue.nodes[L * S:(L + 1) * S] for L in range(layers + 1)])
+    return fine, out, np.stack([Ps @ d for d in depth_fraction]), Ps @ lip_w
 
 
 def _corner_wedges(face: FaceMesh, pairs, node_of, seam_s, S: int, layers: int):

@@ -238,6 +238,46 @@ def vertex_normals(vertices: np.ndarray, quads: np.ndarray) -> np.ndarray:
     return out
 
 
+def smoothed_normals(vertices, quads, iterations: int = 50) -> np.ndarray:
+    """Outward unit normals averaged over the quad graph, for extrusion.
+
+    Each pass replaces a normal by ½ (itself + the mean of its edge
+    neighbours'), a diffusion that widens the curvature radius the extrusion
+    sees: raw normals cross inside the lips and chin (radius < tissue depth)
+    and invert elements; 50 passes keep every default-face element's scaled
+    Jacobian above 0.3 at 12 mm.
+    """
+    import scipy.sparse as sp
+    v = np.asarray(vertices, dtype=np.float64)
+    q = np.asarray(quads, dtype=np.int64)
+    n = vertex_normals(v, q)
+    a = np.concatenate([q[:, i] for i in range(4)])
+    b = np.concatenate([q[:, (i + 1) % 4] for i in range(4)])
+    adj = sp.coo_matrix((np.ones(2 * len(a)), (np.r_[a, b], np.r_[b, a])), shape=(len(v), len(v))).tocsr()
+    adj.data[:] = 1.0
+    deg = np.maximum(np.asarray(adj.sum(axis=1)).ravel(), 1.0)
+    for _ in range(int(iterations)):
+        n = 0.5 * n + 0.5 * (adj @ n) / deg[:, None]
+    norm = np.linalg.norm(n, axis=1, keepdims=True)
+    return np.divide(n, norm, out=np.zeros_like(n), where=norm > 0)
+
+
+def smooth_on_quads(values, quads, passes: int) -> np.ndarray:
+    """Average a per-vertex value with its quad-edge neighbours ``passes`` times."""
+    v = np.asarray(values, dtype=np.float64).copy()
+    q = np.asarray(quads)
+    a = np.concatenate([q[:, i] for i in range(4)])
+    b = np.concatenate([q[:, (i + 1) % 4] for i in range(4)])
+    for _ in range(passes):
+        acc = np.zeros_like(v)
+        cnt = np.zeros_like(v)
+        np.add.at(acc, a, v[b])
+        np.add.at(cnt, a, 1.0)
+        used = cnt > 0
+        v[used] = 0.5 * v[used] + 0.5 * acc[used] / cnt[used]
+    return v
+
+
 def extrude_quads(vertices, quads, thickness, layers: int = 1, material=0, normals=None,
                   check: bool = True) -> HexMesh:
     """Extrude a quad surface inward along its vertex normals into hexahedra.
