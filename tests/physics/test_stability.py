@@ -90,7 +90,7 @@ def test_the_face_takes_its_stable_limit_and_refuses_a_longer_step(coarse_face):
     assert st["element"]["saliva"] < st["element"]["tissue"]          # the stiff saliva sets it
     assert st["tissue_only"] > st["element"]["tissue"]                  # the element bound is the safe side
     # multi-rate (the default): the tissue's own step, the film's nodes in substeps at the film's
-    assert st["tissue_step"] == min(st["element"]["tissue"], st["tissue_only"])
+    assert st["tissue_step"] == min(st["element"]["tissue"], st["tissue_only"], st["natural_shape"])
     assert sim.steps_per_frame == int(np.ceil(1 / (60 * st["tissue_step"]) - 1e-9)) and sim.dt <= st["tissue_step"]
     assert sim.substeps == int(np.ceil(sim.dt / st["dt"] - 1e-9)) > 1 and sim.dt / sim.substeps <= st["dt"]
     single = drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(multirate=False))
@@ -157,3 +157,24 @@ def test_speech_that_starts_mid_gesture_runs_at_the_automatic_step():
     frames = list(sim.frames())
     assert len(frames) == 10 and sim.dt > 3e-5
     assert np.isfinite(frames[-1].vertices).all()
+
+
+def test_the_tissue_step_holds_in_the_tracks_squeezed_natural_shapes(coarse_face):
+    """A rounded posture squeezes lip elements in the muscle field's natural shape (the active strain's
+    reference): their bound there, with their rest masses, caps the multi-rate step (issue 17; the default
+    face's /yu/ inverted an element within 0.06 s at the rest bound)."""
+    from visemeface.physics import drive
+    from visemeface.physics.stability import natural_shape_step
+    from visemeface.postures.library import load_visemes
+
+    fem, rig = coarse_face
+    row = load_visemes().loc["yu"]
+    extra = {k: float(v) for k, v in row.items() if k != "jaw" and v != 0}
+    track = drive.ramp_track(rig.names, 100.0, 0.0, 0.08, 0.17, float(row.get("jaw", 0.0)), extra)
+    sim = drive.StickySimulation(fem, rig, track, "elastic")
+    st, solver = sim.stability, sim.model.tissue_solver
+    assert st["natural_shape"] < min(st["element"]["tissue"], st["tissue_only"])      # squeezed: a lower bound
+    assert sim.dt <= st["natural_shape"] and sim.substeps >= 1
+    assert natural_shape_step(solver, [np.zeros_like(fem.mesh.nodes)]) == pytest.approx(solver.stable_dt, rel=1e-12)
+    frames = list(sim.frames())
+    assert len(frames) == len(track) and np.isfinite(frames[-1].vertices).all()

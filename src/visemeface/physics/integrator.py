@@ -134,6 +134,7 @@ class CentralDifference:
             # held degrees of freedom keep their value at tⁿ through the substeps (the jaw is imposed after)
             self._fine = tuple(np.ascontiguousarray(x[:, None] * free) for x in (a_f, b_f, c_f)) \
                 + (np.ascontiguousarray(1.0 - free),)
+            self._film_on_jaw = bool(np.isin(fast, model.jaw_nodes).any())
             conn = model.tissue_solver.conn
             touches = np.isin(conn, fast).any(axis=1)
             #: The tissue elements that hold a film node, and every node of theirs.
@@ -186,7 +187,8 @@ class CentralDifference:
         model.impose(new, (state.step + 1) * dt)
         if multirate:                   # after the jaw: the film nodes' neighbours interpolate to its uⁿ⁺¹
             self._substeps(state, t, R, new)
-            model.impose(new, (state.step + 1) * dt)
+            if self._film_on_jaw:       # a film node on the jaw held its uⁿ through the substeps
+                model.impose(new, (state.step + 1) * dt)
         # rotate the buffers: u_prev <- u <- new, the old u_prev becomes the next scratch
         self._new = state.u_prev
         state.u_prev, state.u = state.u, new

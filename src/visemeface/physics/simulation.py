@@ -24,7 +24,7 @@ from visemeface.physics.glue import GLUE, glue_per_element
 from visemeface.physics.openings import film_openings, seam_openings
 from visemeface.physics.saliva import SalivaParams
 from visemeface.physics.scenarios import track_values
-from visemeface.physics.stability import face_stable_step
+from visemeface.physics.stability import SHAPE_SAMPLES, face_stable_step, natural_shape_step
 from visemeface.physics.state import SimState
 
 PHYSICS = ("sticky", "elastic")
@@ -225,20 +225,25 @@ class StickySimulation:
                                min_elements=settings.film_elements)
         self.stability = face_stable_step(mesh, fem.tissue, self.film, hourglass_kappa=settings.hourglass_kappa)
         film_dt = self.stability["dt"]
+        from visemeface.physics.hexmesh import HexMesh
+        from visemeface.physics.materials import SOFT_TISSUE
+        from visemeface.physics.tled import TLEDSolver
+        loads = TLEDSolver(HexMesh(mesh.nodes, mesh.hexes[fem.tissue], material=np.zeros(len(fem.tissue), np.int64)),
+                           SOFT_TISSUE, dt=film_dt, hourglass_kappa=settings.hourglass_kappa)
+        self.drive = FaceDrive(fem, rig, self.values, self.fps, loads.internal_forces,
+                               field_smoothing=settings.field_smoothing, min_jacobian=settings.min_jacobian,
+                               lip_bone=settings.lip_bone)
         multirate = settings.multirate and settings.dt is None and "saliva" not in settings.off
+        if multirate and settings.muscles == "active":      # the tissue's bound in the track's natural shapes
+            k = max(1, int(np.ceil(self.n_frames / SHAPE_SAMPLES)))
+            shape = natural_shape_step(loads, (self.drive.kinematic_field(v) for v in self.values[::k]))
+            self.stability["natural_shape"] = shape
+            self.stability["tissue_step"] = min(self.stability["tissue_step"], shape)
         self.steps_per_frame = steps_per_frame(self.fps, settings.dt,
                                                self.stability["tissue_step"] if multirate else film_dt)
         self.dt = 1.0 / (self.fps * self.steps_per_frame)
         #: Film substeps per step (1: single rate).
         self.substeps = int(np.ceil(self.dt / film_dt - 1e-9)) if multirate else 1
-        from visemeface.physics.hexmesh import HexMesh
-        from visemeface.physics.materials import SOFT_TISSUE
-        from visemeface.physics.tled import TLEDSolver
-        loads = TLEDSolver(HexMesh(mesh.nodes, mesh.hexes[fem.tissue], material=np.zeros(len(fem.tissue), np.int64)),
-                           SOFT_TISSUE, dt=self.dt, hourglass_kappa=settings.hourglass_kappa)
-        self.drive = FaceDrive(fem, rig, self.values, self.fps, loads.internal_forces,
-                               field_smoothing=settings.field_smoothing, min_jacobian=settings.min_jacobian,
-                               lip_bone=settings.lip_bone)
         self.model = build_model(fem, self.drive, self.film, settings, self.dt, self.substeps)
         self.integrator = CentralDifference(self.model)
         self.state: SimState | None = None

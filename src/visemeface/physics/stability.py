@@ -156,3 +156,32 @@ def face_stable_step(mesh, tissue, film, *, hourglass_kappa: float) -> dict:
     tissue_only = SAFETY * critical_step(lam_t)
     return {"dt": dt, "element": element, "spectral": spectral, "tissue_only": tissue_only,
             "tissue_step": min(element["tissue"], tissue_only), "film_stiffening": s}
+
+
+#: Track frames sampled at most for :func:`natural_shape_step` (a posture is held or passed through over
+#: several frames; each sample costs about 5 ms on the default face).
+SHAPE_SAMPLES = 120
+
+
+def natural_shape_step(solver, fields) -> float:
+    """The tissue's element bound (``L_e / c_e``, as :attr:`~visemeface.physics.tled.TLEDSolver.stable_dt`)
+    in the muscle field's natural shapes ``X + U`` for each ``U`` in ``fields``, with the rest masses.
+
+    With the muscles as an active strain (:class:`~visemeface.physics.terms.ActiveTissue`) the tissue's
+    reference is the natural shape: an element squeezed there is stiffer for its (unchanged) mass,
+    ω² ∝ a_Y V_Y / V_X (a = Σ(∂h/∂Y)²), so dt_e = L_e(Y) √(V_X / V_Y) / c_e. Measured: the rounded /yu/
+    squeezes a lip-corner element to a bound of 6.4e-5 s, against 1.8e-4 s at rest, and a run at the rest
+    bound inverted it within 0.06 s.
+    """
+    from visemeface.physics.tled import element_geometry
+
+    X, conn = solver.mesh.nodes, solver.conn
+    c = solver.characteristic_length / solver.element_dt          # each element's wave speed
+    best = np.inf
+    for U in fields:
+        dh, vol = element_geometry(X + U, conn)
+        a = np.einsum("eai,eai->e", dh, dh)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            dt = 1.0 / np.sqrt(2.0 * (1.0 + solver.kappa) * a * (vol / solver.volume)) / c
+        best = min(best, float(np.nanmin(dt)))
+    return best
