@@ -158,9 +158,10 @@ def face_stable_step(mesh, tissue, film, *, hourglass_kappa: float) -> dict:
             "tissue_step": min(element["tissue"], tissue_only), "film_stiffening": s}
 
 
-#: Track frames sampled at most for :func:`natural_shape_step` (a posture is held or passed through over
-#: several frames; each sample costs about 5 ms on the default face).
-SHAPE_SAMPLES = 120
+#: Track frames sampled at most for :func:`natural_shape_step`: every frame of a track up to 10 s at 60 fps,
+#: every 6th (0.1 s, shorter than a viseme) of a minute at 60 fps. A sample costs about 5 ms on the default
+#: face (the rig's field and the element geometry), so at most 3 s at the start of a run.
+SHAPE_SAMPLES = 600
 
 
 def natural_shape_step(solver, fields) -> float:
