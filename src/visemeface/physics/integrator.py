@@ -27,7 +27,9 @@ Moran 2000, §6.6). At substep j the film nodes' force is recomputed: the
 film's, and the tissue's from the elements that hold a film node, with the
 other nodes of those elements at their linear interpolation between uⁿ and
 uⁿ⁺¹ (known: they stepped first); the rest of their force (muscles, drag) is
-held at tⁿ:
+held at tⁿ, which is why a term that depends on u (the optional posture spring) must not be there: held
+over the substeps it grows, so :class:`~visemeface.physics.simulation.StickySimulation` runs single-rate
+with one:
 
 .. math::
 

@@ -61,8 +61,8 @@ class PhysicsSettings:
     ``min_jacobian`` bounds the target's volume ratio (:meth:`FaceDrive.untangle`);
     ``field_smoothing`` averages the rig's surface field over quad neighbours.
     ``multirate``: with ``dt`` None, the tissue takes its own stable step and the saliva film's nodes
-    take substeps at the film's (:mod:`visemeface.physics.integrator`); False, or a ``dt`` given, runs
-    everything at one step.
+    take substeps at the film's (:mod:`visemeface.physics.integrator`); False, a ``dt`` given, or a
+    posture spring (a force of u, which the substeps would hold) runs everything at one step.
     ``threads``: numba threads for the steps; None (the default) times a few steps at numba's thread count
     and at one, at the start and every :data:`THREAD_CHECK_SECONDS` of simulated time, and runs on the
     faster (:func:`~visemeface.runtime.faster_thread_count`; the result is the same bits at any count).
@@ -233,7 +233,10 @@ class StickySimulation:
         self.drive = FaceDrive(fem, rig, self.values, self.fps, loads.internal_forces,
                                field_smoothing=settings.field_smoothing, min_jacobian=settings.min_jacobian,
                                lip_bone=settings.lip_bone)
-        multirate = settings.multirate and settings.dt is None and "saliva" not in settings.off
+        # The substeps hold every force but the film's and the tissue's at tⁿ: a posture spring (a force of u)
+        # held over them grows (measured: it diverged above ~170 Hz), so with one the run is single-rate.
+        posture = settings.posture_hz > 0 and "posture" not in settings.off
+        multirate = settings.multirate and settings.dt is None and "saliva" not in settings.off and not posture
         if multirate and settings.muscles == "active":      # the tissue's bound in the track's natural shapes
             k = max(1, int(np.ceil(self.n_frames / SHAPE_SAMPLES)))
             shape = natural_shape_step(loads, (self.drive.kinematic_field(v) for v in self.values[::k]))
