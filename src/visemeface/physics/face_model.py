@@ -299,6 +299,8 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
         conformingly), their extrusion (normals, depth, lip weight) interpolated from the
         unsplit face's so the tissue is the same, only finer along the mouth. The model's
         ``face`` is the refined one; a rig for it is ``MuscleRig.from_file(refine_lip_seam(face, n))``.
+        Simulate it with ``PhysicsSettings(multirate=False)``: at the multi-rate step a fast /uw/ inverted
+        a lip element holding a film node (measured, README).
 
     Returns
     -------
