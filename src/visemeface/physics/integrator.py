@@ -21,16 +21,12 @@ state repeats a run bit for bit.
 **Multi-rate (issue 17).** The saliva film is far stiffer than the tissue (its
 stable step on the default face is 4.8e-5 s, the tissue's 1.8e-4 s) but acts
 only on the few nodes it is tied to (52 of 3,558). With ``substeps`` m > 1 the
-other nodes take the step Δt and the *subcycled nodes* take m substeps δt = Δt/m:
+other nodes take the step Δt and those *film nodes* take m substeps δt = Δt/m:
 nodal-partition subcycling (Belytschko, Yen & Mullen 1979; Belytschko, Liu &
-Moran 2000, §6.6). The subcycled nodes are the film's and every node of the
-tissue elements that hold one (174 on the default face): with the film's nodes
-alone the interface ran through those elements, and on lips refined along the
-seam, whose elements there are thin, a fast /uw/ inverted one. At substep j their
-force is recomputed: the film's, and the tissue's from the elements that hold a
-subcycled node, with the other nodes of those elements (and held ones) at their
-linear interpolation between uⁿ and uⁿ⁺¹ (known: they stepped first); the rest
-of their force (muscles, drag) is
+Moran 2000, §6.6). At substep j the film nodes' force is recomputed: the
+film's, and the tissue's from the elements that hold a film node, with the
+other nodes of those elements at their linear interpolation between uⁿ and
+uⁿ⁺¹ (known: they stepped first); the rest of their force (muscles, drag) is
 held at tⁿ, which is why a term that depends on u (the optional posture spring) must not be there: held
 over the substeps it grows, so :class:`~visemeface.physics.simulation.StickySimulation` runs single-rate
 with one:
@@ -43,7 +39,7 @@ with one:
 (a, b, c the coefficients above at δt; the film's breaking rule advances at
 δt, as in the single-rate run), and the end of the last substep is the film
 nodes' uⁿ⁺¹. The film's stiffness is integrated at its own limit, the
-tissue's at its own. The subcycled nodes' last substep position is part of the
+tissue's at its own. The film nodes' last substep position is part of the
 state (``SimState.fine_prev``), so a checkpoint resumes bit for bit.
 """
 
@@ -129,9 +125,6 @@ class CentralDifference:
         self._new = np.zeros((model.n_nodes, 3))
         m = max(1, int(model.substeps))
         fast = np.ascontiguousarray(model.film_nodes, dtype=np.int64)
-        if m > 1 and len(fast):         # one layer of elements round the film: every node of theirs subcycles
-            conn = model.tissue_solver.conn
-            fast = np.unique(np.concatenate([fast, conn[np.isin(conn, fast).any(axis=1)].ravel()]))
         self._fast = fast
         if m > 1 and len(fast):
             h = dt / m
@@ -146,7 +139,7 @@ class CentralDifference:
             self._film_on_jaw = bool(np.isin(fast, model.jaw_nodes).any())
             conn = model.tissue_solver.conn
             touches = np.isin(conn, fast).any(axis=1)
-            #: The tissue elements that hold a subcycled node, and every node of theirs.
+            #: The tissue elements that hold a film node, and every node of theirs.
             self._elems = np.flatnonzero(touches).astype(np.int64)
             self._ring = np.unique(conn[self._elems]).astype(np.int64)
             self._G = np.zeros((len(fast), 3))
@@ -194,9 +187,9 @@ class CentralDifference:
             self._kernel(s._fe.reshape(-1, 3), s._ptr, s._slot, R, self._A, self._B, self._C, state.u,
                          state.u_prev, new)
         model.impose(new, (state.step + 1) * dt)
-        if multirate:                   # after the jaw: the subcycled nodes' neighbours interpolate to its uⁿ⁺¹
+        if multirate:                   # after the jaw: the film nodes' neighbours interpolate to its uⁿ⁺¹
             self._substeps(state, t, R, new)
-            if self._film_on_jaw:       # a subcycled node on the jaw: its exact uⁿ⁺¹ back
+            if self._film_on_jaw:       # a film node on the jaw held its uⁿ through the substeps
                 model.impose(new, (state.step + 1) * dt)
         # rotate the buffers: u_prev <- u <- new, the old u_prev becomes the next scratch
         self._new = state.u_prev
@@ -204,13 +197,13 @@ class CentralDifference:
         state.step += 1
 
     def _substeps(self, state: SimState, t: float, R: np.ndarray, new: np.ndarray) -> None:
-        """The subcycled nodes' m substeps (module docstring), in one compiled call (:func:`_substep_loop`):
+        """The film nodes' m substeps (module docstring), in one compiled call (:func:`_substep_loop`):
         ``new``'s film-node rows become their uⁿ⁺¹."""
         model, s = self.model, self.model.tissue_solver
         tissue, film = model.terms["tissue"], model.terms["saliva"].film
         m = int(model.substeps)
         h = model.dt / m
-        if state.fine_prev is None:           # a state made without multi-rate: start them at rest
+        if state.fine_prev is None:           # a state made without multi-rate: start the film nodes at rest
             state.fine_prev = state.u[self._fast].copy()
         times = [t + j * h for j in range(m)]
         Ua, Ud, w, geo = tissue.segment(times, state.step)
@@ -261,11 +254,11 @@ def _boundary_forces(elems, rows, ue, conn, dhdx, vol, gamma, hgk, mu, K, fe, ja
 @njit(cache=True, boundscheck=False)
 def _substep_loop(fast, ring, elems, u, new, x, xp, U, ue, Rf, G, R, coef, field, tis, film_args, Z, Zs,
                   tissue_on):  # pragma: no cover - compiled
-    """The subcycled nodes' m = len(w) substeps of one step (the integrator's module docstring); returns the
+    """The film nodes' m = len(w) substeps of one step (the integrator's module docstring); returns the
     smallest J of the elements that hold them (≤ 0: stopped there).
 
-    ``u``, ``new``: every node at tⁿ and tⁿ⁺¹ (the subcycled rows of ``new`` are overwritten with
-    theirs); ``x``, ``xp``: the subcycled nodes' positions now and a substep before (``xp`` is the state's);
+    ``u``, ``new``: every node at tⁿ and tⁿ⁺¹ (the film nodes' rows of ``new`` are overwritten with
+    theirs); ``x``, ``xp``: the film nodes' positions now and a substep before (``xp`` is the state's);
     ``U``, ``ue``, ``Rf``, ``G``: work rows; ``R``: the step's force without the film, held; ``coef``: the
     substep's (a, b, c, hold); ``field``: (U_i, ΔU, w) with the elements seeing U − (U_i + w_j ΔU) at
     substep j; ``tis``: the tissue's element data; ``film_args``: the film rule's arguments after (u, R),
@@ -281,7 +274,7 @@ def _substep_loop(fast, ring, elems, u, new, x, xp, U, ue, Rf, G, R, coef, field
             x[i, d] = u[fast[i], d]
     for j in range(m):
         s = j / m
-        for k in range(ring.shape[0]):            # the other nodes of their elements: interpolated
+        for k in range(ring.shape[0]):            # the other nodes of the film nodes' elements: interpolated
             n = ring[k]
             for d in range(3):
                 U[n, d] = u[n, d] + s * (new[n, d] - u[n, d])
@@ -305,7 +298,7 @@ def _substep_loop(fast, ring, elems, u, new, x, xp, U, ue, Rf, G, R, coef, field
                     G[i, d] = R[fast[i], d]
         Z[:] = Zs[j]
         _film_step(U, Rf, *film_args)
-        _fine_update(fast, G, Rf, a, b, c, hold, x, xp, u, new, (j + 1) / m)
+        _fine_update(fast, G, Rf, a, b, c, hold, x, xp)
     for i in range(fast.shape[0]):
         for d in range(3):
             new[fast[i], d] = x[i, d]
@@ -313,15 +306,13 @@ def _substep_loop(fast, ring, elems, u, new, x, xp, U, ue, Rf, G, R, coef, field
 
 
 @njit(cache=True, boundscheck=False)
-def _fine_update(rows, G, Rf, a, b, c, hold, x, xp, u, new, s):  # pragma: no cover - compiled
-    """One substep of the subcycled nodes: x ← a (G + film force) + b x + c x_prev, in place (xp takes the
-    old x); held rows (fixed, prescribed) follow u + s (new − u), s the substep's end as a fraction of the
-    step; the film's force rows are zeroed for the next substep."""
+def _fine_update(rows, G, Rf, a, b, c, hold, x, xp):  # pragma: no cover - compiled
+    """One substep of the film nodes: x ← a (G + film force) + b x + c x_prev (held rows keep x), in place
+    (xp takes the old x); the film's force rows are zeroed for the next substep."""
     for i in range(rows.shape[0]):
         n = rows[i]
         for d in range(3):
-            v = a[i, d] * (G[i, d] + Rf[n, d]) + b[i, d] * x[i, d] + c[i, d] * xp[i, d] \
-                + hold[i, d] * (u[n, d] + s * (new[n, d] - u[n, d]))
+            v = a[i, d] * (G[i, d] + Rf[n, d]) + b[i, d] * x[i, d] + c[i, d] * xp[i, d] + hold[i, d] * x[i, d]
             xp[i, d] = x[i, d]
             x[i, d] = v
             Rf[n, d] = 0.0

@@ -33,7 +33,7 @@ class SimState:
     saliva : dict of arrays
         ``broken``, ``dry``, ``stored`` (E, 8, 3), ``stretch``, ``flow``, ``damage`` per film slab.
     fine_prev : (k, 3) float64 or None
-        With a multi-rate step (:mod:`visemeface.physics.integrator`): the subcycled nodes' displacement one
+        With a multi-rate step (:mod:`visemeface.physics.integrator`): the film nodes' displacement one
         substep before ``step``; None for a single-rate run.
     """
 
