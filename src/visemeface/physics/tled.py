@@ -200,6 +200,15 @@ def prescribed_rotation(mesh: HexMesh, nodes, centre, axis, angle: Callable[[flo
     return nodes, (lambda t: rigid_rotation(rest, centre, axis, angle(t)))
 
 
+def node_slots(conn: np.ndarray, n_nodes: int) -> tuple[np.ndarray, np.ndarray]:
+    """Node → (element, local node) map as CSR over the flat slots ``e·8 + a``: node ``k``'s slots are
+    ``slot[ptr[k]:ptr[k + 1]]``, in increasing slot order (the order its forces are summed in)."""
+    flat = np.asarray(conn, dtype=np.int64).ravel()
+    ptr = np.zeros(n_nodes + 1, dtype=np.int64)
+    np.cumsum(np.bincount(flat, minlength=n_nodes), out=ptr[1:])
+    return ptr, np.ascontiguousarray(np.argsort(flat, kind="stable").astype(np.int64))
+
+
 # ---------------------------------------------------------------------------
 # numba kernels
 # ---------------------------------------------------------------------------
@@ -678,19 +687,14 @@ class TLEDSolver:
         self._all_nodes_force = (len(self.forces) == 1 and len(self.forces[0][0]) == n
                                  and bool((self.forces[0][0] == np.arange(n)).all()))
 
-        # Node -> (element, local node) map as CSR over flat slots e*8 + a.
-        flat = self.conn.ravel()
-        self._slot = np.ascontiguousarray(np.argsort(flat, kind="stable").astype(np.int64))
-        self._ptr = np.zeros(n + 1, dtype=np.int64)
-        np.cumsum(np.bincount(flat, minlength=n), out=self._ptr[1:])
-        self._conn_flat = flat
+        self._ptr, self._slot = node_slots(self.conn, n)
+        self._conn_flat = self.conn.ravel()
 
         # Work buffers, allocated once.
         self._fe = np.zeros((ne, 8, 3))
         self._jac = np.zeros(ne)
         self._fdef = np.zeros((ne, 3, 3) if element_hook is not None else (1, 3, 3))
         self._energy = np.zeros(ne)
-        self._R = np.zeros((n, 3))
 
     # -- set-up helpers -----------------------------------------------------
 
@@ -790,12 +794,12 @@ class TLEDSolver:
                                  f"({self.mesh.n_elements},) scale factors or None")
             self._fe *= scale[:, None, None]
 
-    def _external(self, t: float, run=None) -> np.ndarray:
-        """R(t) of the loads, in the user's node numbering or the run's (``run``: :meth:`_run_numbering`)."""
-        forces, R = (self.forces, self._R) if run is None else (run.forces, run.R)
-        if len(forces) == 1 and len(forces[0][0]) == len(R) and self._all_nodes_force:
-            v = self._values(forces[0][1], t, len(R), "forces[0]")   # one load on every node
-            if run is None or v.ndim == 1:
+    def _external(self, t: float, run) -> np.ndarray:
+        """R(t) of the loads in the run's node numbering (``run``: :meth:`_run_numbering`)."""
+        forces, R = run.forces, run.R
+        if self._all_nodes_force:         # one load on every node: (3,) broadcasts, (n, 3) is in the mesh's order
+            v = self._values(forces[0][1], t, len(R), "forces[0]")
+            if v.ndim == 1:
                 np.copyto(R, v)
             else:
                 R[run.rank] = v
@@ -803,13 +807,14 @@ class TLEDSolver:
             ids, f = forces[0]
             R[ids] = self._values(f, t, len(ids), "forces[0]")
         elif forces:
-            R[self._force_nodes if run is None else run.force_nodes] = 0.0
+            R[run.force_nodes] = 0.0
             for i, (ids, f) in enumerate(forces):
                 R[ids] += self._values(f, t, len(ids), f"forces[{i}]")
         return R
 
-    def _impose(self, u: np.ndarray, t: float, run=None) -> None:
-        for i, (ids, f) in enumerate(self.prescribed if run is None else run.prescribed):
+    def _impose(self, u: np.ndarray, t: float, run) -> None:
+        """Set the prescribed nodes of ``u`` (in the run's numbering) to their values at ``t``."""
+        for i, (ids, f) in enumerate(run.prescribed):
             u[ids] = self._values(f, t, len(ids), f"prescribed[{i}]")
 
     def _run_numbering(self):
@@ -826,12 +831,9 @@ class TLEDSolver:
             rank = np.empty(n, dtype=np.int64)
             rank[order] = np.arange(n)
             conn = np.ascontiguousarray(rank[self.conn])
-            flat = conn.ravel()
-            ptr = np.zeros(n + 1, dtype=np.int64)
-            np.cumsum(np.bincount(flat, minlength=n), out=ptr[1:])
+            ptr, slot = node_slots(conn, n)
             self._run = SimpleNamespace(
-                order=order, rank=rank, conn=conn, flat=flat, ptr=ptr,
-                slot=np.ascontiguousarray(np.argsort(flat, kind="stable").astype(np.int64)),
+                order=order, rank=rank, conn=conn, flat=conn.ravel(), ptr=ptr, slot=slot,
                 A=np.ascontiguousarray(self._A[order]), B=np.ascontiguousarray(self._B[order]),
                 C=np.ascontiguousarray(self._C[order]), free=self.free[order], mass=self.mass[order],
                 forces=[(rank[ids], f) for ids, f in self.forces], force_nodes=rank[self._force_nodes],
