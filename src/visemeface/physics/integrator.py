@@ -224,7 +224,7 @@ class CentralDifference:
 from numba import njit  # noqa: E402
 
 from visemeface.physics.film import _film_step  # noqa: E402
-from visemeface.physics.tled import _element_force  # noqa: E402
+from visemeface.physics.tled import _element_force, _node_force  # noqa: E402
 
 
 @njit(cache=True, boundscheck=False)
@@ -236,18 +236,14 @@ def _boundary_forces(elems, rows, ue, conn, dhdx, vol, gamma, hgk, mu, K, fe, ja
     for k in range(elems.shape[0]):
         e = elems[k]
         _element_force(e, ue, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, False, energy, False)
-        if not jac[e] > 0.0:
-            jmin = jac[e]
-        elif jac[e] < jmin and jmin > 0.0:
+        if jmin > 0.0 and not jac[e] >= jmin:     # the smallest J; the first that is not > 0 (or NaN) stays
             jmin = jac[e]
     fe_flat = fe.reshape(-1, 3)
     for i in range(rows.shape[0]):
         n = rows[i]
+        f = _node_force(n, fe_flat, ptr, slot)
         for d in range(3):
-            f = 0.0
-            for p in range(ptr[n], ptr[n + 1]):
-                f += fe_flat[slot[p], d]
-            G[i, d] = R[n, d] - f
+            G[i, d] = R[n, d] - f[d]
     return jmin
 
 

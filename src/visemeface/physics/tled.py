@@ -387,9 +387,8 @@ def _element_forces_serial(u, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef,
 
 
 @njit(inline="always", error_model="numpy", fastmath=_FASTMATH)
-def _integrate_node(n, fe_flat, ptr, slot, R, A, B, C, u, uprev, unew):  # pragma: no cover - compiled
-    """Gather node n's force from its (element, local node) slots, then the
-    central-difference update u⁺ = A (R − F) + B u + C u⁻ of its three DOFs."""
+def _node_force(n, fe_flat, ptr, slot):  # pragma: no cover - compiled
+    """Node n's assembled internal force: the sum over its (element, local node) slots, in slot order."""
     f0 = 0.0
     f1 = 0.0
     f2 = 0.0
@@ -398,6 +397,14 @@ def _integrate_node(n, fe_flat, ptr, slot, R, A, B, C, u, uprev, unew):  # pragm
         f0 += fe_flat[s, 0]
         f1 += fe_flat[s, 1]
         f2 += fe_flat[s, 2]
+    return f0, f1, f2
+
+
+@njit(inline="always", error_model="numpy", fastmath=_FASTMATH)
+def _integrate_node(n, fe_flat, ptr, slot, R, A, B, C, u, uprev, unew):  # pragma: no cover - compiled
+    """Gather node n's force from its (element, local node) slots, then the
+    central-difference update u⁺ = A (R − F) + B u + C u⁻ of its three DOFs."""
+    f0, f1, f2 = _node_force(n, fe_flat, ptr, slot)
     unew[n, 0] = A[n, 0] * (R[n, 0] - f0) + B[n, 0] * u[n, 0] + C[n, 0] * uprev[n, 0]
     unew[n, 1] = A[n, 1] * (R[n, 1] - f1) + B[n, 1] * u[n, 1] + C[n, 1] * uprev[n, 1]
     unew[n, 2] = A[n, 2] * (R[n, 2] - f2) + B[n, 2] * u[n, 2] + C[n, 2] * uprev[n, 2]
@@ -465,17 +472,7 @@ def _step_serial(ue, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, energy, 
 def _gather_nb(fe_flat, ptr, slot, out):  # pragma: no cover - compiled
     """Assembled nodal forces out[n] = Σ over n's slots of fe_flat[slot]."""
     for n in prange(out.shape[0]):
-        f0 = 0.0
-        f1 = 0.0
-        f2 = 0.0
-        for p in range(ptr[n], ptr[n + 1]):
-            s = slot[p]
-            f0 += fe_flat[s, 0]
-            f1 += fe_flat[s, 1]
-            f2 += fe_flat[s, 2]
-        out[n, 0] = f0
-        out[n, 1] = f1
-        out[n, 2] = f2
+        out[n, 0], out[n, 1], out[n, 2] = _node_force(n, fe_flat, ptr, slot)
 
 
 # ---------------------------------------------------------------------------
