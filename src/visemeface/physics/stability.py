@@ -174,7 +174,7 @@ def natural_shape_step(solver, fields) -> float:
     squeezes a lip-corner element to a bound of 6.4e-5 s, against 1.8e-4 s at rest, and a run at the rest
     bound inverted it within 0.06 s.
     """
-    from visemeface.physics.tled import element_geometry
+    from visemeface.physics.tled import characteristic_length, element_geometry
 
     X, conn = solver.mesh.nodes, solver.conn
     c = solver.characteristic_length / solver.element_dt          # each element's wave speed
@@ -183,6 +183,6 @@ def natural_shape_step(solver, fields) -> float:
         dh, vol = element_geometry(X + U, conn)
         a = np.einsum("eai,eai->e", dh, dh)
         with np.errstate(divide="ignore", invalid="ignore"):
-            dt = 1.0 / np.sqrt(2.0 * (1.0 + solver.kappa) * a * (vol / solver.volume)) / c
+            dt = characteristic_length(a * (vol / solver.volume), solver.kappa) / c
         best = min(best, float(np.nanmin(dt)))
     return best

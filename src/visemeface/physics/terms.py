@@ -154,11 +154,11 @@ class ActiveTissue(Tissue):
         """(U_i, ΔU, w_j, geometry): the field U(times[j]) = U_i + w_j ΔU and the natural shape's geometry (as
         refreshed at ``step``); the times lie within one track segment (a step divides a frame)."""
         self._refresh(step, times[0])
-        a, d, _ = self.drive.target_segment(times[0])
-        w = np.array([self.drive.target_segment(t)[2] for t in times])
-        if self.drive.target_segment(times[-1])[0] is not a:
+        segments = [self.drive.target_segment(t) for t in times]
+        a, d, _ = segments[0]
+        if segments[-1][0] is not a:
             raise ValueError("substeps cross a track frame: the step must divide a frame")
-        return a, d, w, self._cur[1]
+        return a, d, np.array([w for _, _, w in segments]), self._cur[1]
 
 
 class MuscleLoads(Term):

@@ -200,6 +200,12 @@ def prescribed_rotation(mesh: HexMesh, nodes, centre, axis, angle: Callable[[flo
     return nodes, (lambda t: rigid_rotation(rest, centre, axis, angle(t)))
 
 
+def characteristic_length(a, kappa: float):
+    """Each element's ``L = 1 / sqrt(2 (1 + κ) a)`` from ``a = Σ(∂h/∂x)²`` (the module docstring's
+    stability bound; its stable step is ``L / c``)."""
+    return 1.0 / np.sqrt(2.0 * (1.0 + kappa) * np.asarray(a, dtype=np.float64))
+
+
 def node_slots(conn: np.ndarray, n_nodes: int) -> tuple[np.ndarray, np.ndarray]:
     """Node → (element, local node) map as CSR over the flat slots ``e·8 + a``: node ``k``'s slots are
     ``slot[ptr[k]:ptr[k + 1]]``, in increasing slot order (the order its forces are summed in)."""
@@ -647,7 +653,7 @@ class TLEDSolver:
         self.hourglass_stiffness = self.kappa * self.volume * lam_2mu * a / 8.0
 
         # Stability: dt_e = L_e / c_e, L_e = 1 / sqrt(2 (1 + κ) a_e).
-        self.characteristic_length = 1.0 / np.sqrt(2.0 * (1.0 + self.kappa) * a)
+        self.characteristic_length = characteristic_length(a, self.kappa)
         #: Each element's own stable step L_e / c_e (s).
         self.element_dt = dt_e = self.characteristic_length / mat["wave_speed"]
         self.critical_element = int(np.argmin(dt_e))
