@@ -16,7 +16,8 @@ For every GRID clip in the realdata folder (default ``../shared/realdata``; see 
    audio's speech span (:func:`speech_correlation`, the figure ``lipsync_acceptance.py`` prints
    too); ``--out DIR`` also writes both profiles and an overlay plot.
 
-Run: ``python scripts/compare_realdata.py [--realdata DIR] [--timing align|grid] [--out DIR] [--per-phone]``
+Run: ``python scripts/compare_realdata.py [--realdata DIR] [--timing align|grid] [--physics sticky|elastic]
+[--out DIR] [--per-phone]`` (``--physics``: the FEM face instead of the kinematic one).
 
 The GRID clips are the GRID corpus's (Cooke, Barker, Cunningham & Shao, JASA 120:2421, 2006).
 """
@@ -81,10 +82,11 @@ def extract_audio(video: Path, wav: Path) -> None:
                     "-ar", "16000", str(wav)], check=True)
 
 
-def synthetic_profile(segments, fps: float, n_frames: int, detector):
-    """Render the default face along the segments and analyse it: the profile."""
+def synthetic_profile(segments, fps: float, n_frames: int, detector, physics: str | None = None):
+    """Render the default face along the segments (kinematic, or the FEM face with ``physics`` sticky or
+    elastic at its default settings) and analyse it: the profile."""
     from visemeface.analysis.profiles import analyze_frames
-    from visemeface.motion import KinematicMotion
+    from visemeface.motion import KinematicMotion, SimulatedMotion
     from visemeface.muscles.rig import default_rig
     from visemeface.postures.library import load_visemes
     from visemeface.render.renderer import Renderer
@@ -92,7 +94,12 @@ def synthetic_profile(segments, fps: float, n_frames: int, detector):
 
     rig = default_rig()
     track = activation_track(segments, load_visemes(), fps=fps)
-    motion = KinematicMotion(rig, track)
+    if physics is None:
+        motion = KinematicMotion(rig, track)
+    else:
+        from visemeface.physics.drive import StickySimulation, physics_face
+        fem, rig = physics_face(rig.face, rig)
+        motion = SimulatedMotion(StickySimulation(fem, rig, track, physics=physics))
     with Renderer(rig.face, size=(256, 256), view="mouth") as renderer:
         box = renderer.mouth_box()
         frames = [renderer.render(f.vertices) for f in motion.frames()][:n_frames]
@@ -177,6 +184,8 @@ def main() -> None:
                     help="align: forced alignment of the text to the clip's audio (default); grid: the "
                          "word alignment file, else the text stretched onto the speech span")
     ap.add_argument("--out", type=Path, help="also write <clip>_real.csv, <clip>_synth.csv, <clip>.png here")
+    ap.add_argument("--physics", choices=("sticky", "elastic"),
+                    help="animate the FEM face (default: the kinematic face)")
     ap.add_argument("--per-phone", action="store_true",
                     help="also print the mean opening height per aligned phone, real vs ours")
     args = ap.parse_args()
@@ -197,12 +206,12 @@ def main() -> None:
         text = grid_sentence(clip)
         real, fps, n = real_profile(video, detector)
         segments, timing = timed_segments(video, text, args.timing, n / fps)
-        synth = synthetic_profile(segments, fps, n, detector)
+        synth = synthetic_profile(segments, fps, n, detector, args.physics)
         d = l2_distance(real, synth)
         c = correlation(real, synth, max_lag=5)
         sp = speech_correlation(real, synth, video)
         rows += phone_heights(real, synth, segments, sp["span_s"])
-        print(json.dumps({"clip": clip, "text": text, "timing": timing, "frames": n,
+        print(json.dumps({"clip": clip, "text": text, "timing": timing, "physics": args.physics, "frames": n,
                           "open_frames_real": int((real["count"] > 0).sum()),
                           "open_frames_synth": int((synth["count"] > 0).sum()),
                           "l2": {k: round(v, 4) for k, v in d.items()},
