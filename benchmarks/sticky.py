@@ -12,8 +12,10 @@
    each other run's wall time / the auto run's at the same thread count.
 2. ``speak_sticky``: the library path ``speak --physics sticky`` takes on the
    3 s example (``transcripts/one_five_zero_zero_six.txt``): transcript ->
-   activation track -> :func:`visemeface.physics.drive.simulate_track` ->
-   render each frame (512 px, face view); wall seconds per simulated second. Its
+   activation track -> :func:`visemeface.animate.simulated_motion` -> render each
+   frame (512 px, face view); wall seconds per simulated second, for the speech
+   commands' default lips (``PhysicsSettings.speech()``: refined along the seam,
+   cohesive film) and the seed's model (``PhysicsSettings()``). Its
    threads are chosen as ``speak`` chooses them: the faster of the largest ``--threads``
    count and one, timed during the run (``PhysicsSettings.threads`` None).
 
@@ -70,7 +72,8 @@ def bench_fem_face(seconds: float, threads: int, dt: float | None = None, multir
 def bench_speak(threads: int) -> None:
     from visemeface.face.procedural import default_face
     from visemeface.muscles.rig import MuscleRig
-    from visemeface.physics.drive import PhysicsSettings, simulate_track
+    from visemeface.animate import simulated_motion
+    from visemeface.physics.drive import PhysicsSettings
     from visemeface.runtime import set_threads
     from visemeface.postures.library import load_visemes
     from visemeface.render.renderer import Renderer
@@ -79,24 +82,26 @@ def bench_speak(threads: int) -> None:
     from visemeface.speech.transcripts import read_transcript
 
     set_threads(threads)
-    t0 = time.perf_counter()
-    face = default_face()
-    rig = MuscleRig.from_file(face)
-    segments = read_transcript(transcripts_path("one_five_zero_zero_six.txt"))
-    ranges = {n: tuple(r) for n, r in zip(rig.names, rig.ranges)}           # as speak builds it
-    track = activation_track(segments, load_visemes(rig=rig), fps=30, ranges=ranges)
-    frames = simulate_track(face, rig, track, physics="sticky",
-                            settings=PhysicsSettings())          # the default: the stable limit
-    renderer = Renderer(face, size=(512, 512), view="face")
-    n = 0
-    for v in frames:
-        renderer.render(v)
-        n += 1
-    wall = time.perf_counter() - t0
-    seconds = (n - 1) / 30.0
-    emit(benchmark="speak_sticky", transcript="one_five_zero_zero_six.txt", threads=f"{threads} or 1, timed (auto)", frames=n,
-         simulated_s=round(seconds, 3), wall_s=round(wall, 1), wall_per_simulated_s=round(wall / seconds, 1),
-         target_wall_per_simulated_s=15, load_average=os.getloadavg()[0])
+    for model, settings in (("speech default (lips refined, rupture time)", PhysicsSettings.speech()),
+                            ("seed (--seam-elements 0 --rupture-time 0)", PhysicsSettings())):
+        t0 = time.perf_counter()
+        face = default_face()
+        rig = MuscleRig.from_file(face)
+        segments = read_transcript(transcripts_path("one_five_zero_zero_six.txt"))
+        ranges = {n: tuple(r) for n, r in zip(rig.names, rig.ranges)}           # as speak builds it
+        track = activation_track(segments, load_visemes(rig=rig), fps=30, ranges=ranges)
+        motion = simulated_motion(rig, track, "sticky", settings)              # as speak runs it
+        renderer = Renderer(motion.render_face, size=(512, 512), view="face")
+        n = 0
+        for f in motion.frames():
+            renderer.render(f.vertices)
+            n += 1
+        wall = time.perf_counter() - t0
+        seconds = (n - 1) / 30.0
+        emit(benchmark="speak_sticky", model=model, transcript="one_five_zero_zero_six.txt",
+             threads=f"{threads} or 1, timed (auto)", frames=n, simulated_s=round(seconds, 3), wall_s=round(wall, 1),
+             wall_per_simulated_s=round(wall / seconds, 1), target_wall_per_simulated_s=15,
+             single_rate_frames=len(motion.sim.single_rate_frames), load_average=os.getloadavg()[0])
 
 
 def main(argv=None):

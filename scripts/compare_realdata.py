@@ -16,8 +16,12 @@ For every GRID clip in the realdata folder (default ``../shared/realdata``; see 
    audio's speech span (:func:`speech_correlation`, the figure ``lipsync_acceptance.py`` prints
    too); ``--out DIR`` also writes both profiles and an overlay plot.
 
+``--releases`` also prints how each opening grows, real and ours
+(:func:`visemeface.analysis.profiles.opening_onsets`: frames to 90 % of its width, the height's
+power-law exponent), and the medians over the openings that last ``RELEASE_RUN`` frames or more.
+
 Run: ``python scripts/compare_realdata.py [--realdata DIR] [--timing align|grid] [--physics sticky|elastic]
-[--out DIR] [--per-phone]`` (``--physics``: the FEM face instead of the kinematic one).
+[--out DIR] [--per-phone] [--releases]`` (``--physics``: the FEM face instead of the kinematic one).
 
 The GRID clips are the GRID corpus's (Cooke, Barker, Cunningham & Shao, JASA 120:2421, 2006).
 """
@@ -84,9 +88,9 @@ def extract_audio(video: Path, wav: Path) -> None:
 
 def synthetic_profile(segments, fps: float, n_frames: int, detector, physics: str | None = None):
     """Render the default face along the segments (kinematic, or the FEM face with ``physics`` sticky or
-    elastic at its default settings) and analyse it: the profile."""
+    elastic as ``speak --physics`` runs it) and analyse it: the profile."""
     from visemeface.analysis.profiles import analyze_frames
-    from visemeface.motion import KinematicMotion, SimulatedMotion
+    from visemeface.motion import KinematicMotion
     from visemeface.muscles.rig import default_rig
     from visemeface.postures.library import load_visemes
     from visemeface.render.renderer import Renderer
@@ -97,10 +101,9 @@ def synthetic_profile(segments, fps: float, n_frames: int, detector, physics: st
     if physics is None:
         motion = KinematicMotion(rig, track)
     else:
-        from visemeface.physics.drive import StickySimulation, physics_face
-        fem, rig = physics_face(rig.face, rig)
-        motion = SimulatedMotion(StickySimulation(fem, rig, track, physics=physics))
-    with Renderer(rig.face, size=(256, 256), view="mouth") as renderer:
+        from visemeface.animate import simulated_motion
+        motion = simulated_motion(rig, track, physics)          # the speech commands' FEM face
+    with Renderer(motion.render_face, size=(256, 256), view="mouth") as renderer:
         box = renderer.mouth_box()
         frames = [renderer.render(f.vertices) for f in motion.frames()][:n_frames]
     return analyze_frames(frames, box, fps, detector, source="synthetic")
@@ -177,6 +180,34 @@ def print_phone_table(rows) -> None:
     print(table.sort_values("ours_minus_real").round(3).to_string())
 
 
+#: An opening counts as a release into a vowel (``--releases``' medians) when it stays open this many frames.
+RELEASE_RUN = 4
+
+
+def release_rows(clip: str, profile) -> list[dict]:
+    """:func:`opening_onsets` of a profile as JSON-ready rows."""
+    from visemeface.analysis.profiles import opening_onsets
+
+    o = opening_onsets(profile)
+    return [{"clip": clip, "t": round(r.time, 2), "frames": int(r.frames), "peak_width": round(r.peak_width, 3),
+             "frames_to_90pct": int(r.frames_to_90pct),
+             "height_exponent": None if np.isnan(r.height_exponent) else round(r.height_exponent, 2)}
+            for r in o.itertuples()]
+
+
+def print_release_summary(rows: dict[str, list[dict]]) -> None:
+    """Medians of frames to 90 % width and of the height exponent over the long openings, real vs ours."""
+    out = {}
+    for who, rs in rows.items():
+        long = [r for r in rs if r["frames"] >= RELEASE_RUN]
+        ex = [r["height_exponent"] for r in long if r["height_exponent"] is not None]
+        out[who] = {"openings": len(long),
+                    "frames_to_90pct": [r["frames_to_90pct"] for r in long],
+                    "median_frames_to_90pct": float(np.median([r["frames_to_90pct"] for r in long])) if long else None,
+                    "median_height_exponent": round(float(np.median(ex)), 2) if ex else None}
+    print(json.dumps({"releases_summary": out, "min_frames_open": RELEASE_RUN}), flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--realdata", type=Path, default=ROOT.parent / "shared" / "realdata")
@@ -188,6 +219,8 @@ def main() -> None:
                     help="animate the FEM face (default: the kinematic face)")
     ap.add_argument("--per-phone", action="store_true",
                     help="also print the mean opening height per aligned phone, real vs ours")
+    ap.add_argument("--releases", action="store_true",
+                    help="also print how each opening grows (frames to 90 %% width, height exponent), real vs ours")
     args = ap.parse_args()
 
     import warnings
@@ -200,7 +233,7 @@ def main() -> None:
     detector = OpeningDetector()
     if args.out:
         args.out.mkdir(parents=True, exist_ok=True)
-    rows = []
+    rows, releases = [], {"real": [], "ours": []}
     for video in sorted(args.realdata.glob("*.mpg")):
         clip = video.stem
         text = grid_sentence(clip)
@@ -220,6 +253,11 @@ def main() -> None:
                           "speech_s": sp["span_s"], "r_height_speech": round(sp["r"], 3),
                           "best_lag_speech": sp["lag"], "r_height_speech_at_lag": round(sp["r_lag"], 3)}),
               flush=True)
+        if args.releases:
+            for who, prof in (("real", real), ("ours", synth)):
+                found = release_rows(clip, prof)
+                releases[who] += found
+                print(json.dumps({"clip": clip, "releases": who, "openings": found}), flush=True)
         if args.out:
             write_profile(real, args.out / f"{clip}_real.csv", force=True)
             write_profile(synth, args.out / f"{clip}_synth.csv", force=True)
@@ -228,6 +266,8 @@ def main() -> None:
                           metrics=("count", "area", "width", "height"), title=f'"{text}"', force=True)
     if args.per_phone:
         print_phone_table(rows)
+    if args.releases:
+        print_release_summary(releases)
 
 
 if __name__ == "__main__":

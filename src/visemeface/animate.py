@@ -45,13 +45,15 @@ def _warn_audio_length(audio, track, fps) -> None:
 
 
 def simulated_motion(rig, track, physics: str, settings=None):
-    """The FEM face of ``rig.face`` driven by ``track`` (every setting checked before any step)."""
+    """The FEM face of ``rig.face`` driven by ``track`` (every setting checked before any step); ``settings``
+    default to :meth:`PhysicsSettings.speech` (the lips refined along the seam: the motion renders
+    the refined face and writes ``rig.face``'s vertices, its first ones)."""
     from visemeface.motion import SimulatedMotion
-    from visemeface.physics.drive import PhysicsSettings, StickySimulation
-    from visemeface.physics.face_model import build_fem_face
+    from visemeface.physics.drive import PhysicsSettings, StickySimulation, physics_face
 
-    return SimulatedMotion(StickySimulation(build_fem_face(rig.face), rig, track, physics=physics,
-                                            settings=settings or PhysicsSettings()))
+    settings = settings or PhysicsSettings.speech()
+    fem, fine_rig = physics_face(rig.face, rig, seam_elements=settings.seam_elements)
+    return SimulatedMotion(StickySimulation(fem, fine_rig, track, physics=physics, settings=settings), face=rig.face)
 
 
 def animate(utterance, sinks: list, render=None, *, rig=None, emotions=None, interp: str | None = None,

@@ -75,7 +75,13 @@ def face_digest(face) -> str:
 
 
 class Motion:
-    """Base class: ``face``, ``fps``, ``n_frames``; :meth:`frames`; :meth:`key`."""
+    """Base class: ``face``, ``fps``, ``n_frames``; :meth:`frames`; :meth:`key`.
+
+    ``face`` is the mesh the outputs are written for. A frame's ``vertices`` may hold more rows than
+    it has: the first ``face.n_vertices`` are its vertices, and the whole array is the vertices of
+    :attr:`render_face`, a finer mesh of the same surface that is rendered (the FEM face's lips
+    refined along the seam, :func:`visemeface.face.refine.refine_lip_seam`).
+    """
 
     #: True when the motion has state worth saving (a simulation), False when any
     #: frame is cheap to make again.
@@ -86,6 +92,11 @@ class Motion:
     face = None
     fps: float = 0.0
     n_frames: int = 0
+
+    @property
+    def render_face(self):
+        """The mesh rendered and checkpointed: ``face``, or a finer one whose first vertices are ``face``'s."""
+        return self.face
 
     def frames(self, start: int = 0, state: dict | None = None) -> Iterator[Frame]:
         """Frames ``start … n_frames-1`` (a resumable motion continues from ``state``)."""
@@ -139,15 +150,21 @@ class SimulatedMotion(Motion):
     """The FEM face driven along a track (:class:`~visemeface.physics.drive.StickySimulation`).
 
     Each frame's ``data`` holds the track's jaw activation and the saliva
-    measures of :meth:`StickySimulation.saliva_state`.
+    measures of :meth:`StickySimulation.saliva_state`. ``face`` (default: the FEM's face) is the mesh
+    the outputs are written for; the FEM's face, rendered, may refine it (its first vertices are
+    ``face``'s, :attr:`Motion.render_face`).
     """
 
     resumable = True
     label = "simulating"
 
-    def __init__(self, sim):
+    def __init__(self, sim, face=None):
         self.sim = sim
-        self.face = sim.fem.face
+        self._render_face = sim.fem.face
+        self.face = sim.fem.face if face is None else face
+        n = self.face.n_vertices
+        if n > self._render_face.n_vertices:
+            raise ValueError(f"the FEM's face has {self._render_face.n_vertices} vertices, fewer than the face's {n}")
         self.fps = float(sim.fps)
         self.n_frames = int(sim.n_frames)
         self._jaw = sim.values[:, list(sim.rig.names).index("jaw")]
@@ -161,8 +178,12 @@ class SimulatedMotion(Motion):
             data = {"jaw": float(self._jaw[fr.index]), **fr.saliva}
             yield Frame(fr.index, fr.time, np.asarray(fr.display, dtype=np.float32), data)
 
+    @property
+    def render_face(self):
+        return self._render_face
+
     def state(self) -> dict:
         return self.sim.checkpoint(self._last)
 
     def key(self) -> str:
-        return digest(__version__, face_digest(self.face), self.sim.fingerprint())
+        return digest(__version__, face_digest(self.face), face_digest(self._render_face), self.sim.fingerprint())

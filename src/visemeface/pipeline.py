@@ -26,6 +26,7 @@ run reads back instead of rendering them again.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 from dataclasses import dataclass, field
 
 from visemeface.errors import InputError
@@ -88,9 +89,12 @@ def _image(frame, renderer, sinks, stats) -> None:
     stats.rendered += 1
 
 
-def _feed(frame, renderer, sinks, stats) -> None:
+def _feed(frame, renderer, sinks, stats, n_vertices: int) -> None:
+    """Render ``frame`` (all its vertices: the motion's render face) and write it (the face's vertices)."""
     if renderer is not None:
         _image(frame, renderer, sinks, stats)
+    if len(frame.vertices) > n_vertices:
+        frame = dataclasses.replace(frame, vertices=frame.vertices[:n_vertices])
     for s in sinks:
         s.write(frame)
 
@@ -130,7 +134,7 @@ def run(motion: Motion, sinks: list[Sink], render: RenderSettings | None = None,
         if need_image:
             from visemeface.render.renderer import Renderer
 
-            renderer = stack.enter_context(Renderer(motion.face, size=(render.size, render.size),
+            renderer = stack.enter_context(Renderer(motion.render_face, size=(render.size, render.size),
                                                     view=render.view, samples=render.msaa))
             run_info.size, run_info.mouth_box = render.size, renderer.mouth_box()
         run_info.extra.setdefault("render_key", render.key())
@@ -159,14 +163,14 @@ def _stream(motion, sinks, renderer, checkpoint, done, state, every, stats, show
     bar = progress(total=motion.n_frames, desc=motion.label, show=show_progress)
     with bar:
         for i in range(done):                 # finished before an interruption: replay, do not simulate
-            _feed(checkpoint.replay(i), renderer, sinks, stats)
+            _feed(checkpoint.replay(i), renderer, sinks, stats, motion.face.n_vertices)
             stats.replayed += 1
             bar.update(1)
         record = checkpoint is not None and motion.resumable
         if record:
             checkpoint.start(done)
         for frame in motion.frames(done, state):
-            _feed(frame, renderer, sinks, stats)
+            _feed(frame, renderer, sinks, stats, motion.face.n_vertices)
             stats.live += 1
             bar.update(1)
             if record:

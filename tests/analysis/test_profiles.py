@@ -6,7 +6,7 @@ import pytest
 
 from visemeface.analysis.openings import OpeningDetector
 from visemeface.analysis.profiles import (
-    COLUMNS, analyze_frames, l2_distance, plot_profiles, read_profile, write_profile)
+    COLUMNS, analyze_frames, l2_distance, opening_onsets, plot_profiles, read_profile, write_profile)
 from visemeface.analysis.synthetic import merging_mouth_frames
 from visemeface.errors import InputError
 
@@ -203,3 +203,27 @@ def test_plot_of_a_single_frame_shows_its_values(tmp_path, merging):
 
     legend_only = coloured(merging.iloc[:1].assign(area=np.nan, width=np.nan, height=np.nan), "none.png")
     assert coloured(merging.iloc[:1], "one.png") > legend_only + 3 * 20        # a marker in each panel
+
+
+def _onset_profile(count, width, height, fps=25.0):
+    frame = np.arange(len(count))
+    return pd.DataFrame({"frame": frame, "time": frame / fps, "count": count, "area": np.zeros(len(count)),
+                         "width": width, "height": height})
+
+
+def test_opening_onsets_measure_how_each_opening_grows():
+    # closed, then an opening whose height is 0.01 t^2 (t frames since the last closed one) and whose
+    # width reaches 90 % of its widest on its third frame; closed again; then one frame open at full width
+    t = np.arange(1, 6, dtype=float)
+    count = [0, 0, *[1] * 5, 0, 1, 1, 0]
+    width = [0, 0, 0.2, 0.5, 0.65, 0.7, 0.7, 0, 0.8, 0.8, 0]
+    height = [0, 0, *(0.01 * t ** 2), 0, 0.1, 0.1, 0]
+    o = opening_onsets(_onset_profile(count, width, height))
+    assert o["frame"].tolist() == [2, 8] and o["frames"].tolist() == [5, 2]
+    assert o["frames_to_90pct"].tolist() == [3, 1]
+    assert o["peak_width"].tolist() == [0.7, 0.8]
+    assert o["height_exponent"].iloc[0] == pytest.approx(2.0)      # slowly, then faster (seed 001, Fig. 19)
+    assert np.isnan(o["height_exponent"].iloc[1])                  # too short to fit
+    # a window cuts a long opening; an opening already there on frame 0 has no onset
+    assert opening_onsets(_onset_profile(count, width, height), window=2)["frames"].tolist() == [2, 2]
+    assert opening_onsets(_onset_profile([1, 1, 0], [0.5, 0.5, 0], [0.1, 0.1, 0])).empty

@@ -136,3 +136,19 @@ def test_colour_box_edges_near_the_mouth_corners(realdata):
             b = boxes[r.frame]
             off += [b.x - r.left_x, b.x + b.w - 1 - r.right_x]
     assert np.abs(off).max() <= 5, off
+
+
+def test_real_releases_grow_over_frames_and_taper(realdata):
+    """How real openings grow (the figure the sticky lips are compared with, issue 16): at 25 fps an
+    opening that lasts 4+ frames reaches 90 % of its width over 2-4 frames (80-160 ms), not in the
+    frame it appears, and its height rises fast, then tapers (power-law exponent below 1)."""
+    from visemeface.analysis.profiles import opening_onsets, profile_from_openings
+    f90, expo = [], []
+    for clip in CLIPS:
+        _, _, found = measure(realdata, clip)
+        o = opening_onsets(profile_from_openings(found, 25.0, clip))
+        o = o[o["frames"] >= 4]
+        f90 += o["frames_to_90pct"].tolist()
+        expo += o["height_exponent"].dropna().tolist()
+    assert len(f90) >= 6 and np.median(f90) >= 2 and max(f90) >= 3, f90
+    assert len(expo) >= 2 and max(expo) < 1, expo

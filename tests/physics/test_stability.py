@@ -159,6 +159,31 @@ def test_speech_that_starts_mid_gesture_runs_at_the_automatic_step():
     assert np.isfinite(frames[-1].vertices).all()
 
 
+@pytest.mark.slow
+def test_speech_that_starts_with_the_lips_crossed_runs():
+    """"you ..." starts in the rounding that leads into /yu/, where the outer half of the seam is crossed
+    (its film slabs folded over, J <= 0): the film's push there inverted a lip element within 0.8 ms, at
+    1e-5 s as at the stable step, sticky and elastic, on the seed's face and the refined one. Crossed slabs
+    now start squeezed out, as pressed ones do."""
+    from visemeface.animate import simulated_motion
+    from visemeface.muscles.rig import default_rig
+    from visemeface.physics import drive
+    from visemeface.postures.library import load_visemes
+    from visemeface.speech.g2p import text_to_segments
+    from visemeface.speech.timeline import activation_track
+
+    rig = default_rig()
+    ranges = {n: tuple(r) for n, r in zip(rig.names, rig.ranges)}
+    track = activation_track(text_to_segments("you blew", warn=False), load_visemes(rig=rig), fps=60,
+                             ranges=ranges).iloc[:6]
+    sim = simulated_motion(rig, track, "elastic", drive.PhysicsSettings(threads=1)).sim
+    start = sim.initial_state()
+    folded = sim.film.stretch(start.u) >= 1e300
+    assert folded.sum() >= 8 and start.saliva["dry"][folded].all()
+    frames = list(sim.frames())
+    assert len(frames) == 6 and np.isfinite(frames[-1].vertices).all()
+
+
 def test_the_tissue_step_holds_in_the_tracks_squeezed_natural_shapes(coarse_face):
     """A rounded posture squeezes lip elements in the muscle field's natural shape (the active strain's
     reference): their bound there, with their rest masses, caps the multi-rate step (issue 17; the default
@@ -193,3 +218,41 @@ def test_a_posture_spring_runs_single_rate(coarse_face):
     assert len(frames) == len(track) and np.isfinite(frames[-1].vertices).all()
     off = drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(posture_hz=300.0, off=("posture",)))
     assert off.substeps > 1
+
+
+def test_a_diverged_multirate_frame_runs_again_at_one_rate(coarse_face, monkeypatch):
+    """A multi-rate frame that diverges is run again from its start with every node at the film's
+    substep (StickySimulation._advance_frame); the state is carried to that step and back (u_prev from the
+    velocity, the film nodes' from their last substep), so the run goes on as the plain run goes: the
+    same mouth within 0.02 % of its width (measured 3e-6), where carrying u_prev unscaled (the velocity
+    times the substeps) moves it 2 %. A frame that diverges at one rate too raises."""
+    from visemeface.physics import drive
+    from visemeface.physics.integrator import CentralDifference
+
+    fem, rig = coarse_face
+    track = drive.ramp_track(rig.names, 60.0, 0.02, 0.15, 0.1, 0.3)
+    plain = drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(threads=1))
+    assert plain.substeps > 1
+    ref = [f.vertices for f in plain.frames()]
+    real = CentralDifference.advance
+
+    def diverge_on_frame_6(self, state, n):
+        if self is sim.integrator and state.step == 5 * sim.steps_per_frame and n == sim.steps_per_frame:
+            real(self, state, n // 2)                    # half a frame in, then it "diverges"
+            raise SimulationDiverged("forced", state.step, state.t, 0)
+        real(self, state, n)
+
+    monkeypatch.setattr(CentralDifference, "advance", diverge_on_frame_6)
+    sim = drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(threads=1))
+    got = [f.vertices for f in sim.frames()]
+    assert sim.single_rate_frames == [6] and len(got) == len(ref)
+    assert np.array_equal(got[5], ref[5])
+    err = max(np.abs(a - b).max() for a, b in zip(got[6:], ref[6:])) / fem.mouth_width
+    assert 0 < err < 2e-4, err
+
+    def always(self, state, n):
+        raise SimulationDiverged("forced", state.step, state.t, 0)
+    monkeypatch.setattr(CentralDifference, "advance", always)
+    sim = drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(threads=1))
+    with pytest.raises(SimulationDiverged):
+        list(sim.frames())

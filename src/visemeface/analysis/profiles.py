@@ -305,6 +305,32 @@ def correlation(a: pd.DataFrame, b: pd.DataFrame, columns: Iterable[str] = METRI
     return {"r": r0, "lag": best, "lag_s": best * dt, "r_lag": best_r if np.isfinite(best_r) else float("nan")}
 
 
+def opening_onsets(df: pd.DataFrame, window: int = 6) -> pd.DataFrame:
+    """How each mouth opening grows: one row per onset (an open frame after a closed one).
+
+    For each onset frame ``k`` (``count > 0`` at ``k``, ``0`` at ``k - 1``) the opening's run is the
+    frames up to the next closed one, at most ``window`` long. Columns: ``frame`` and ``time`` of the
+    onset, ``frames`` (the run's length), ``peak_width`` (widest in the run), ``frames_to_90pct`` (the
+    run's first frame at >= 90 % of that width, 1 = the onset frame itself: a release that is full
+    width as soon as it is seen) and ``height_exponent``: the slope of log height over log frames
+    since the last closed frame (1, 2, ...), up to the run's highest frame, when that is 3 or more
+    frames (seed 001, Fig. 19: < 1 opens fast and tapers, > 1 opens slowly then faster), else NaN.
+    """
+    count = df["count"].to_numpy()
+    width, height = df["width"].to_numpy(float), df["height"].to_numpy(float)
+    rows = []
+    for k in np.flatnonzero((count[1:] > 0) & (count[:-1] == 0)) + 1:
+        run = k + np.arange(min(window, len(count) - k))
+        run = run[:np.argmax(count[run] == 0)] if (count[run] == 0).any() else run
+        w, h = width[run], height[run]
+        top = int(np.argmax(h)) + 1
+        expo = float(np.polyfit(np.log(np.arange(1, top + 1)), np.log(h[:top]), 1)[0]) if top >= 3 else np.nan
+        rows.append((int(k), float(df["time"].iloc[k]), len(run), float(w.max()),
+                     int(np.argmax(w >= 0.9 * w.max())) + 1, expo))
+    return pd.DataFrame(rows, columns=["frame", "time", "frames", "peak_width", "frames_to_90pct",
+                                       "height_exponent"])
+
+
 def shifted_profile(df: pd.DataFrame, seconds: float) -> pd.DataFrame:
     """Copy of a profile with its times moved by ``-seconds`` (undo a lag for plotting)."""
     out = df.copy()

@@ -117,9 +117,11 @@ def add_physics_arguments(p: argparse.ArgumentParser, default: str, choices: tup
     g.add_argument("--moisture", type=float, metavar="M", help="initial saliva moisture 0M (default 100)")
     g.add_argument("--evaporation", type=float, metavar="E", help="moisture lost per second (default 0)")
     g.add_argument("--rupture-time", type=float, metavar="S", help="saliva strands thin over S seconds before they "
-                   "snap (e.g. 0.03, the zipper; default 0: the seed's brittle film)")
+                   "snap (default 0.03: the lips unzip from the centre; 0: the seed's brittle film)")
+    g.add_argument("--seam-elements", type=int, metavar="N", help="refine the lips to N tissue elements along the "
+                   "seam (default 48, one per saliva slab; 0: the face's own, the seed's mesh)")
     g.add_argument("--film-corners", action="store_true", default=None,
-                   help="carry the saliva film into the mouth corners (with --rupture-time: lips unzip from the centre)")
+                   help="carry the saliva film into the mouth corners")
     return g
 
 
@@ -128,13 +130,12 @@ def physics_from_args(args, **more):
     from visemeface.errors import InputError
 
     given = [f"--{n.replace('_', '-')}" for n in ("glue", "glue_profile", "moisture", "evaporation", "rupture_time",
-                                                  "film_corners") if getattr(args, n, None) is not None]
+                                                  "seam_elements", "film_corners") if getattr(args, n, None) is not None]
     if args.physics == "none":
         if given:
             raise InputError(f"{given[0]} needs --physics sticky or elastic")
         return None
     from visemeface.physics.drive import PhysicsSettings
-    from visemeface.physics.saliva import SalivaParams
 
     params = {}
     if args.moisture is not None:
@@ -151,13 +152,18 @@ def physics_from_args(args, **more):
         if not (math.isfinite(args.glue) and args.glue >= 0):
             raise InputError(f"--glue must be >= 0 and finite, got {args.glue:g}")
         more["glue"] = args.glue
+    if getattr(args, "seam_elements", None) is not None:
+        if args.seam_elements < 0:
+            raise InputError(f"--seam-elements must be >= 0 (0: the face's own elements), got {args.seam_elements}")
+        more["seam_elements"] = args.seam_elements or None
+    speech = PhysicsSettings.speech()
     try:
-        saliva = dataclasses.replace(SalivaParams(), **params)
+        saliva = dataclasses.replace(speech.saliva, **params)
     except InputError as e:
         raise InputError(str(e).replace("moisture must", "--moisture must")
                          .replace("evaporation rate must", "--evaporation must")
                          .replace("saliva rupture time must", "--rupture-time must")) from None
-    return PhysicsSettings(glue_profile=args.glue_profile, saliva=saliva, **more)
+    return PhysicsSettings.speech(glue_profile=args.glue_profile, saliva=saliva, **more)
 
 
 def simulation_of(rig, track, physics: str, settings):
@@ -173,7 +179,7 @@ def checkpoint_of(motion, sinks, args):
         return None
     from visemeface.checkpoint import RunCheckpoint, checkpoint_folder
 
-    ck = RunCheckpoint(checkpoint_folder(sinks[0].targets()[0]), motion.key(), motion.face.n_vertices, motion.fps)
+    ck = RunCheckpoint(checkpoint_folder(sinks[0].targets()[0]), motion.key(), motion.render_face.n_vertices, motion.fps)
     ck.check(resume=args.resume, force=args.force)
     return ck
 

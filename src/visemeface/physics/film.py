@@ -155,9 +155,10 @@ class SalivaFilm:
 
     def initial_state(self, u=None, t: float = 0.0) -> dict:
         """The film's state at ``u`` (default rest): slabs already stretched past Z start parted, slabs pressed
-        (Q < 1) start squeezed out (``dry``: no force until the lips part to the film's thickness). Pressed lips
-        in a rounded first posture (Q = 0.09 on the 3 s example's silence) otherwise met the film's full push at
-        once, which inverted a lip element within 0.3 ms at any step."""
+        (Q < 1) or folded over (the lips crossed, J ≤ 0) start squeezed out (``dry``: no force until the lips
+        part to the film's thickness). Pressed lips in a rounded first posture (Q = 0.09 on the 3 s example's
+        silence) otherwise met the film's full push at once, which inverted a lip element within 0.3 ms at any
+        step; so did the outer half of the seam, crossed in the rounding that leads into "you" (within 0.8 ms)."""
         E = self.n_elements
         state = {"broken": np.zeros(E, dtype=np.bool_), "dry": np.zeros(E, dtype=np.bool_),
                  "stored": np.zeros((E, 8, 3)), "stretch": np.ones(E), "flow": np.zeros(E),
@@ -166,7 +167,7 @@ class SalivaFilm:
             Q = self.stretch(u)
             state["stretch"][:] = np.minimum(Q, 1e300)
             state["broken"][:] = Q >= self.breaking_points(t)
-            pressed = Q < 1.0          # squeezed out between lips pressed in the starting posture: no force
+            pressed = (Q < 1.0) | (Q >= 1e300)      # squeezed out between lips pressed or crossed at the start
             state["dry"][pressed] = True      # until they part to the film's thickness and it re-forms
             state["broken"][pressed] = True
         return state

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from visemeface.errors import InputError, close_matches
+from visemeface.errors import InputError, SimulationDiverged, close_matches
 from visemeface.physics.film import FILM_ELEMENTS, SalivaFilm
 from visemeface.physics.glue import GLUE, glue_per_element
 from visemeface.physics.openings import film_openings, seam_openings
@@ -26,6 +26,7 @@ from visemeface.physics.saliva import SalivaParams
 from visemeface.physics.scenarios import track_values
 from visemeface.physics.stability import SHAPE_SAMPLES, face_stable_step, natural_shape_step
 from visemeface.physics.state import SimState
+
 
 PHYSICS = ("sticky", "elastic")
 #: Least volume ratio J of a tissue element in the drive's target (see :meth:`FaceDrive.untangle`).
@@ -66,6 +67,12 @@ class PhysicsSettings:
     ``threads``: numba threads for the steps; None (the default) times a few steps at numba's thread count
     and at one, at the start and every :data:`THREAD_CHECK_SECONDS` of simulated time, and runs on the
     faster (:func:`~visemeface.runtime.faster_thread_count`; the result is the same bits at any count).
+    ``seam_elements``: where the FEM face is built here from a face (:func:`physics_face`, the speech
+    commands), its lips are refined to this many tissue elements along the seam
+    (:func:`~visemeface.physics.face_model.build_fem_face`); None: the face's own elements.
+
+    These defaults are the seed's model. The speech commands run :meth:`speech`: the same with the
+    lips refined along the seam and saliva strands that thin before they snap (issue 16).
     """
 
     dt: float | None = None
@@ -85,6 +92,23 @@ class PhysicsSettings:
     min_jacobian: float = MIN_JACOBIAN
     threads: int | None = None
     multirate: bool = True
+    seam_elements: int | None = None
+
+    @classmethod
+    def speech(cls, **changes) -> PhysicsSettings:
+        """The sticky lips of ``speak``, ``say``, ``batch`` and ``simulate`` (issue 16), with ``changes``.
+
+        The lips refined to :data:`~visemeface.face.refine.SEAM_ELEMENTS` tissue elements along
+        the seam, so the 48 film slabs can part one by one, and saliva strands that thin over
+        :data:`~visemeface.physics.saliva.RUPTURE_TIME` before they snap: the lips unzip from the
+        centre over several frames. Without either, the seed's brittle film lets go along the whole
+        seam in one frame (measured: ``scripts/sticky_figures.py``). ``RUPTURE_TIME`` is a value
+        chosen inside saliva's measured range for that zipper, not a measurement of lips.
+        """
+        from visemeface.face.refine import SEAM_ELEMENTS
+        from visemeface.physics.saliva import RUPTURE_TIME
+        base = {"seam_elements": SEAM_ELEMENTS, "saliva": SalivaParams(rupture_time=RUPTURE_TIME)}
+        return cls(**{**base, **changes})
 
 
 @dataclass
@@ -257,6 +281,9 @@ class StickySimulation:
         self._timed = settings.threads is None and self._most_threads > 1
         #: numba threads the steps run on (see PhysicsSettings.threads).
         self.threads = settings.threads if settings.threads is not None else self._most_threads
+        #: Frames whose multi-rate step diverged and that ran at one rate instead (:meth:`_advance_frame`).
+        self.single_rate_frames: list[int] = []
+        self._fine = None
 
     @property
     def n_frames(self) -> int:
@@ -310,13 +337,48 @@ class StickySimulation:
         self._pick_threads()
         check = max(1, int(round(THREAD_CHECK_SECONDS * self.fps)))
         if start is not None:
-            self.integrator.advance(self.state, spf)
+            self._advance_frame(first)
         for k in range(first, self.n_frames):
             if k > first:
                 if self._timed and (k - first) % check == 0:
                     self._pick_threads()
-                self.integrator.advance(self.state, spf)
+                self._advance_frame(k)
             yield self._frame(k)
+
+    def _advance_frame(self, k: int) -> None:
+        """Step the state to frame ``k``. A multi-rate frame that diverges is run again from its start at one
+        rate, every node at the film's substep (:meth:`_single_rate_frame`; the frame goes in
+        :attr:`single_rate_frames`); one that diverges single-rate too raises."""
+        if self.substeps == 1:
+            self.integrator.advance(self.state, self.steps_per_frame)
+            return
+        start = self.state.copy()
+        try:
+            self.integrator.advance(self.state, self.steps_per_frame)
+        except SimulationDiverged:
+            self.state = start
+            self._single_rate_frame()
+            self.single_rate_frames.append(k)
+
+    def _single_rate_frame(self) -> None:
+        """One frame of ``substeps`` × the steps at the film's substep h = dt / substeps, from and back to the
+        multi-rate state: u_prev is the position h (then dt) before u, the film's nodes' from their last
+        substep (exact), the others' linearly from the velocity (u − u_prev) / dt (central differences'
+        change of step)."""
+        from visemeface.physics.integrator import CentralDifference
+        m, st = self.substeps, self.state
+        if self._fine is None:
+            self._fine = CentralDifference(build_model(self.fem, self.drive, self.film, self.settings, self.dt / m, 1))
+        fast = self.integrator._fast
+        st.u_prev = st.u - (st.u - st.u_prev) / m
+        if st.fine_prev is not None:
+            st.u_prev[fast] = st.fine_prev
+        st.step, st.dt = st.step * m, self.dt / m
+        self._fine.advance(st, self.steps_per_frame * m)
+        st.fine_prev = st.u_prev[fast].copy()
+        st.u_prev = st.u - (st.u - st.u_prev) * m
+        st.step, st.dt = st.step // m, self.dt
+        self.state = st.copy()          # no array of the state is the fine integrator's scratch
 
     def _pick_threads(self) -> None:
         """Run on ``settings.threads``, or time :data:`THREAD_TRIAL_STEPS` steps on a copy of the state at
@@ -327,8 +389,12 @@ class StickySimulation:
             set_threads(self.threads)
             self.integrator.step(self.state.copy())
             return
-        self.threads = faster_thread_count(lambda: self.integrator.advance(self.state.copy(), THREAD_TRIAL_STEPS),
-                                           self._most_threads)
+        def trial():
+            try:
+                self.integrator.advance(self.state.copy(), THREAD_TRIAL_STEPS)
+            except SimulationDiverged:      # the next frame runs single-rate (_advance_frame): time what ran
+                pass
+        self.threads = faster_thread_count(trial, self._most_threads)
 
     def _frame(self, k: int) -> SimFrame:
         st = self.state
@@ -355,33 +421,44 @@ class StickySimulation:
         return h.hexdigest()[:16]
 
 
-def physics_face(face, rig=None, fem=None):
-    """(fem, rig) for a face: the FEM model and a rig on the same face (built if not given)."""
+def physics_face(face, rig=None, fem=None, seam_elements: int | None = None):
+    """(fem, rig) for a face: the FEM model (built if not given, its lips refined to ``seam_elements``
+    along the seam if given) and a rig on ``face`` as the FEM refines it (``rig``'s own file placed
+    again on :func:`~visemeface.face.refine.refine_lip_seam`'s face, whose first vertices are ``face``'s).
+    """
+    from visemeface.face.refine import refine_lip_seam
     from visemeface.muscles.rig import MuscleRig
     from visemeface.physics.face_model import build_fem_face
 
     if fem is None:
-        fem = build_fem_face(face)
-    if rig is None:
-        rig = MuscleRig.from_file(face)
+        fem = build_fem_face(face, seam_elements=seam_elements)
+    if rig is None or rig.face.n_vertices != fem.face.n_vertices:
+        fine = face if seam_elements is None else refine_lip_seam(face, seam_elements)
+        if fine.n_vertices != fem.face.n_vertices:
+            raise ValueError(f"the FEM face has {fem.face.n_vertices} vertices, the face refined to "
+                             f"{seam_elements} seam elements {fine.n_vertices}")
+        rig = MuscleRig.from_file(fine, None if rig is None else rig.path)
     return fem, rig
 
 
 def simulate_track(face, rig, track: pd.DataFrame, physics: str = "sticky",
                    settings: PhysicsSettings | None = None, fem=None, states: list | None = None):
-    """Animate ``track`` on the FEM face: an iterator of float32 (N, 3) display vertices per track row.
+    """Animate ``track`` on the FEM face: an iterator of float32 (N, 3) display vertices of ``face`` per track row.
 
     The kinematic path's drop-in for ``--physics sticky|elastic`` (lips' rest gap
-    drawn closed, :meth:`FEMFace.display_vertices`). All input checks run before
+    drawn closed, :meth:`FEMFace.display_vertices`; ``settings`` default to :meth:`PhysicsSettings.speech`,
+    whose refined lips' first vertices are ``face``'s). All input checks run before
     the first frame. ``states``, if given, collects each frame's saliva measures.
     """
-    fem, rig = physics_face(face, rig, fem)
+    settings = settings or PhysicsSettings.speech()
+    fem, rig = physics_face(face, rig, fem, settings.seam_elements)
     sim = StickySimulation(fem, rig, track, physics=physics, settings=settings)
+    n = face.n_vertices
 
     def frames():
         for fr in sim.frames():
             if states is not None:
                 states.append({"frame": fr.index, "time": fr.time, **fr.saliva})
-            yield fr.display.astype(np.float32)
+            yield fr.display[:n].astype(np.float32)
 
     return frames()
