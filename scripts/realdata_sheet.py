@@ -13,9 +13,15 @@ Pearson r of the opening width, height and area (in mouth widths) over the speec
 best lag within +-5 frames (:func:`compare_realdata.speech_correlation`), and the fractions of each
 tile that are teeth and dark cavity (:mod:`visemeface.render.mouth_pixels`), printed as JSON lines.
 
+``--releases`` draws a release instead (``docs/images/realdata_releases.png``): per clip, 12 frames
+from the start of a bilabial release (:data:`RELEASES`), the real mouth above the seed's sticky FEM model
+(``PhysicsSettings()``) and the speech commands' sticky lips (``PhysicsSettings.speech()``), each render
+with the openings the project's analysis finds outlined.
+
 Usage::
 
     PYTHONPATH=src python scripts/realdata_sheet.py [--realdata ../shared/realdata] [-o docs/images/realdata.png]
+    PYTHONPATH=src python scripts/realdata_sheet.py --releases -o docs/images/realdata_releases.png
 """
 
 from __future__ import annotations
@@ -38,6 +44,8 @@ FPS = 25.0
 TILE = (192, 128)          # width, height of one tile
 WIDTH_FRACTION = 0.55      # mouth width / tile width
 SHOWN = 8
+#: ``--releases``: per clip, the first of the 12 frames shown (25 fps): "blue", "blue", "p two".
+RELEASES = {"swwp2s": 33, "bbaf2n": 33, "lbax4n": 19}
 
 
 def read_clip(path: Path) -> list[np.ndarray]:
@@ -62,8 +70,9 @@ def crop(img: np.ndarray, centre, mouth_w: float) -> np.ndarray:
     return cv2.resize(part, TILE, interpolation=cv2.INTER_CUBIC)
 
 
-def our_frames(segments, n_frames: int):
-    """Our face along ``segments`` at :data:`FPS`, rendered (mouth view): frames, tile centre, width, box."""
+def our_frames(segments, n_frames: int, physics=None):
+    """Our face along ``segments`` at :data:`FPS`, rendered (mouth view): frames, tile centre, width, box.
+    ``physics``: PhysicsSettings of the sticky FEM face (default: the kinematic face)."""
     from visemeface.muscles.rig import default_rig
     from visemeface.postures.library import load_visemes
     from visemeface.render.renderer import Renderer
@@ -71,12 +80,32 @@ def our_frames(segments, n_frames: int):
 
     rig = default_rig()
     track = activation_track(segments, load_visemes(rig=rig), fps=FPS)
-    poses = rig.poses(track)
-    r = Renderer(rig.face, size=(256, 256), view="mouth")
+    if physics is None:
+        poses, face = rig.poses(track), rig.face
+    else:
+        from visemeface.animate import simulated_motion
+        motion = simulated_motion(rig, track, "sticky", physics)
+        poses, face = [f.vertices for f in motion.frames()], motion.render_face
+    r = Renderer(face, size=(256, 256), view="mouth")
     x, y, w, h = box = r.mouth_box()
     frames = [r.render(poses[min(i, len(poses) - 1)]) for i in range(n_frames)]
     r.release()
     return frames, (x + w / 2, y + h * 0.45), w, box
+
+
+def release_tiles(name, real, segments, centre, mouth_w, detector):
+    """``--releases``' tiles and labels of one clip: real, the seed's sticky model, the speech default's."""
+    from visemeface.analysis.openings import draw_openings
+    from visemeface.physics.drive import PhysicsSettings
+
+    shown = range(RELEASES[name], RELEASES[name] + 12)
+    tiles = [crop(real[i], centre, mouth_w) for i in shown]
+    labels = [f"{name} real {i / FPS:.2f}s" for i in shown]
+    for who, settings in (("seed", PhysicsSettings()), ("v2", PhysicsSettings.speech())):
+        ours, c, w, box = our_frames(segments, shown.stop, settings)
+        tiles += [crop(draw_openings(ours[i], detector.detect(ours[i], box), box), c, w) for i in shown]
+        labels += [f"{name} {who} {i / FPS:.2f}s" for i in shown]
+    return tiles, labels
 
 
 def interior_fractions(real, ours, centre, mouth_w, our_centre, our_w, span) -> dict:
@@ -100,6 +129,8 @@ def main(argv=None) -> int:
     ap.add_argument("--realdata", type=Path, default=Path(__file__).resolve().parents[2] / "shared" / "realdata")
     ap.add_argument("-o", "--output", type=Path, default=Path("docs/images/realdata.png"))
     ap.add_argument("--force", action="store_true")
+    ap.add_argument("--releases", action="store_true", help="a bilabial release per clip: real, the seed's sticky "
+                    "model, the speech commands' sticky lips (12 frames each)")
     args = ap.parse_args(argv)
     import warnings
 
@@ -117,6 +148,10 @@ def main(argv=None) -> int:
         real = read_clip(path)
         pr, _, _ = real_profile(path, detector)
         segments, _ = timed_segments(path, sentence, "align", len(real) / FPS)
+        if args.releases:
+            more = release_tiles(name, real, segments, centre, mouth_w, detector)
+            tiles, labels = tiles + more[0], labels + more[1]
+            continue
         ours, our_centre, our_w, our_box = our_frames(segments, len(real))
         po = analyze_frames(ours, our_box, FPS, detector, source="synthetic")
         sp = speech_correlation(pr, po, path)
@@ -138,7 +173,7 @@ def main(argv=None) -> int:
             out[f"real_{k}_mean"], out[f"ours_{k}_mean"] = round(float(a.mean()), 4), round(float(b.mean()), 4)
             out[f"corr_{k}"] = round(float(np.corrcoef(a, b)[0, 1]), 2) if a.std() > 0 and b.std() > 0 else None
         print(json.dumps(out), flush=True)
-    sheet = compose_sheet(tiles, labels, columns=SHOWN)
+    sheet = compose_sheet(tiles, labels, columns=12 if args.releases else SHOWN)
     from PIL import Image
 
     args.output.parent.mkdir(parents=True, exist_ok=True)

@@ -387,11 +387,10 @@ def test_same_equilibrium_with_and_without_glue_once_open_wide(model, opened):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="issue 16 open with the default (seed's) film: its free ends by the unglued "
-                   "corner slit carry 1.2-1.3x the centre's stretch and its brittle release cascades over the seam in one "
-                   "frame; film_corners + a rupture time unzip the coarse face from the centre (test_zipper.py) but are "
-                   "not the default (on the default face that film holds to jaw 0.35; with the lips refined, "
-                   "build_fem_face(seam_elements=48), it unzips the default face from the centre: test_zipper.py)")
+@pytest.mark.xfail(strict=True, reason="the seed's model (PhysicsSettings(), the unrefined face): its film's free ends "
+                   "by the unglued corner slit carry 1.2-1.3x the centre's stretch and its brittle release cascades over "
+                   "the seam in one frame; the speech commands' lips (PhysicsSettings.speech(): refined along the seam, "
+                   "rupture time) unzip the default face from the centre (test_zipper.py)")
 def test_sticky_lips_part_at_the_centre_first_and_later_than_elastic(model, opened):
     fem, _ = model
     s_frames = opened["sticky"][1]
