@@ -24,6 +24,19 @@ def test_a_clip_record_that_is_not_an_object_means_other_settings(tmp_path):
     assert clip_state(job, tmp_path) == "done"
 
 
+def test_a_sticky_clip_made_with_the_seed_lips_is_not_done(tmp_path):
+    """A clip made by --physics sticky before the speech lips changed (issue 16: refined seam, rupture time)
+    was "done" on --resume: its record has no ``lips``, so it now counts as made with other settings."""
+    job = Job(clip="c1", text="one", physics="sticky")
+    (tmp_path / "c1").mkdir()
+    old = {k: v for k, v in job.settings().items() if k != "lips"}
+    (tmp_path / "c1" / CLIP_RECORD).write_text(json.dumps({"settings": old}))
+    assert clip_state(job, tmp_path) == "other"
+    (tmp_path / "c1" / CLIP_RECORD).write_text(json.dumps({"settings": job.settings()}))
+    assert clip_state(job, tmp_path) == "done"
+    assert "lips" not in Job(clip="c2", text="one").settings()        # the kinematic face has no FEM lips
+
+
 @pytest.mark.slow
 def test_ctrl_c_on_a_terminal_ends_batch_with_one_line(tmp_path):
     """A terminal's Ctrl-C reaches the whole process group: each Dask worker printed a KeyboardInterrupt

@@ -405,6 +405,9 @@ def test_speak_physics_frames_come_from_the_fem_face(short, capsys, coarse_rig):
     (["--physics", "sticky", "--glue", "-0.1"], "--glue must be >= 0"),
     (["--glue", "0.1"], "--glue needs --physics sticky or elastic"),
     (["--physics", "sticky", "--glue-profile", "0.95..0.99=1"], "names no saliva element"),
+    (["--physics", "sticky", "--seam-elements", "-1"], "--seam-elements must be in 0..192"),
+    (["--physics", "sticky", "--seam-elements", "4800"], "--seam-elements must be in 0..192"),
+    (["--seam-elements", "48"], "--seam-elements needs --physics sticky or elastic"),
 ])
 def test_speak_physics_bad_input_exits_2_before_simulating(short, capsys, coarse_rig, monkeypatch, extra,
                                                            message):

@@ -130,6 +130,7 @@ def test_speech_releases_a_bilabial_from_the_centre_over_frames():
     segs = text_to_segments("bob", warn=False)
     track = activation_track(segs, load_visemes(rig=rig), fps=FPS)
     ends = segs.loc[segs["phoneme"] == "b", "end"].to_numpy()[:1]
+    assert len(ends) == 1
     frames = {}
     for physics in ("sticky", "elastic"):
         sim = simulated_motion(rig, track, physics).sim

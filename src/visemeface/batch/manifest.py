@@ -68,6 +68,10 @@ class Job:
         d = asdict(self)
         d["emotion"] = [list(e) for e in self.emotion]
         d["outputs"] = list(self.outputs)
+        if self.physics != "none":          # the FEM lips the physics runs (PhysicsSettings.speech)
+            from visemeface.face.refine import SEAM_ELEMENTS
+            from visemeface.physics.saliva import RUPTURE_TIME
+            d["lips"] = {"seam_elements": SEAM_ELEMENTS, "rupture_time": RUPTURE_TIME}
         return d
 
 

@@ -387,7 +387,10 @@ class StickySimulation:
 
         if not self._timed:
             set_threads(self.threads)
-            self.integrator.step(self.state.copy())
+            try:
+                self.integrator.step(self.state.copy())      # compiles every kernel before the first frame
+            except SimulationDiverged:      # that frame runs single-rate (_advance_frame)
+                pass
             return
         def trial():
             try:
@@ -433,7 +436,9 @@ def physics_face(face, rig=None, fem=None, seam_elements: int | None = None):
     if fem is None:
         fem = build_fem_face(face, seam_elements=seam_elements)
     if rig is None or rig.face.n_vertices != fem.face.n_vertices:
-        fine = face if seam_elements is None else refine_lip_seam(face, seam_elements)
+        fine = face
+        if fine.n_vertices != fem.face.n_vertices and seam_elements is not None:
+            fine = refine_lip_seam(face, seam_elements)
         if fine.n_vertices != fem.face.n_vertices:
             raise ValueError(f"the FEM face has {fem.face.n_vertices} vertices, the face refined to "
                              f"{seam_elements} seam elements {fine.n_vertices}")
