@@ -146,12 +146,12 @@ def main(argv=None) -> int:
     for name, sentence, centre, mouth_w in CLIPS:
         path = args.realdata / f"{name}.mpg"
         real = read_clip(path)
-        pr, _, _ = real_profile(path, detector)
         segments, _ = timed_segments(path, sentence, "align", len(real) / FPS)
         if args.releases:
             more = release_tiles(name, real, segments, centre, mouth_w, detector)
             tiles, labels = tiles + more[0], labels + more[1]
             continue
+        pr, _, _ = real_profile(path, detector)
         ours, our_centre, our_w, our_box = our_frames(segments, len(real))
         po = analyze_frames(ours, our_box, FPS, detector, source="synthetic")
         sp = speech_correlation(pr, po, path)
