@@ -208,3 +208,31 @@ def test_glue_0_3_parts_the_lips_fully_at_full_jaw_later_than_the_default_glue()
     assert first[0.3, 0.35] is None and first[0.08, 0.35] is not None          # glue 0.3 holds at jaw 0.35
     assert first[0.3, 1.0] is not None and first[0.3, 1.0] > first[0.08, 1.0]  # ... parts at full jaw, later
     assert span[0.3, 1.0] >= 0.99 * span[0.08, 1.0]                          # ... and fully
+
+
+@pytest.mark.slow
+def test_the_speech_lips_keep_the_seeds_asymmetry_and_evaporation():
+    """On the speech commands' lips (refined seam, rupture time), as on the seed's model
+    (test_sticky.py): glue on one side only opens the other side first, and a film that has dried
+    (evaporation 600 a second) lets go fully at a smaller jaw later on (measured: 0.15 against 0.35)."""
+    from visemeface.face.procedural import default_face
+    from visemeface.physics.face_model import seam_openings
+    from visemeface.runtime import set_threads
+    set_threads(1)
+    fem, rig = drive.physics_face(default_face(), seam_elements=48)
+
+    def run(track, **kw):
+        sim = drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings.speech(threads=1, **kw))
+        return [(fr.vertices, sim.broken.copy(), fr.saliva) for fr in sim.frames()]
+
+    frames = run(drive.ramp_track(rig.names, 200, 0.02, 0.1, 0.0, 0.35), glue_profile="right=0.3,left=0")
+    first = next(f for f in frames if f[2]["open_count"] > 0)
+    op = seam_openings(fem, first[0])["open"]
+    assert op[fem.seam_s > 0].any() and not op[fem.seam_s < 0].any()
+
+    def jaw_at_break(start):
+        track = drive.ramp_track(rig.names, 250, start, 0.08, 0.0, 0.35)
+        fr = run(track, saliva=SalivaParams(evaporation=600.0, rupture_time=RUPTURE_TIME))
+        return track["jaw"].iloc[next(i for i, f in enumerate(fr) if f[1].all())]
+
+    assert jaw_at_break(0.12) < 0.8 * jaw_at_break(0.02)
