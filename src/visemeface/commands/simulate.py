@@ -113,5 +113,8 @@ def run(args) -> int:
         print(f"FEM face: {c['nodes']} nodes, {c['elements']} hexahedra ({c['saliva']} saliva); "
               f"dt {motion.sim.dt:.4g} s in {motion.sim.substeps} film substep(s) "
               f"(stable limits: tissue {motion.sim.stability['tissue_step']:.4g} s, film {motion.sim.stability['dt']:.4g} s)")
+        if motion.sim.single_rate_frames:
+            print(f"{len(motion.sim.single_rate_frames)} frame(s) diverged multi-rate and ran again at one rate "
+                  f"(the first: frame {motion.sim.single_rate_frames[0]})")
         print(pipeline.summary(stats, args.fps))
     return 0
