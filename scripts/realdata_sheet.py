@@ -27,6 +27,7 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import sys
 from pathlib import Path
@@ -85,7 +86,7 @@ def our_frames(segments, n_frames: int, physics=None):
     else:
         from visemeface.animate import simulated_motion
         motion = simulated_motion(rig, track, "sticky", physics)
-        poses, face = [f.vertices for f in motion.frames()], motion.render_face
+        poses, face = [f.vertices for f in itertools.islice(motion.frames(), n_frames)], motion.render_face
     r = Renderer(face, size=(256, 256), view="mouth")
     x, y, w, h = box = r.mouth_box()
     frames = [r.render(poses[min(i, len(poses) - 1)]) for i in range(n_frames)]

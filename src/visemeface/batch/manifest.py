@@ -68,10 +68,9 @@ class Job:
         d = asdict(self)
         d["emotion"] = [list(e) for e in self.emotion]
         d["outputs"] = list(self.outputs)
-        if self.physics != "none":          # the FEM lips the physics runs (PhysicsSettings.speech)
-            from visemeface.face.refine import SEAM_ELEMENTS
-            from visemeface.physics.saliva import RUPTURE_TIME
-            d["lips"] = {"seam_elements": SEAM_ELEMENTS, "rupture_time": RUPTURE_TIME}
+        if self.physics != "none":          # the FEM face's settings the physics runs at
+            from visemeface.physics.simulation import PhysicsSettings
+            d["lips"] = repr(PhysicsSettings.speech())
         return d
 
 

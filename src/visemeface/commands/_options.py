@@ -162,14 +162,14 @@ def physics_from_args(args, **more):
             raise InputError(f"--seam-elements must be in 0..{MAX_SEAM_ELEMENTS} (0: the face's own elements), "
                              f"got {args.seam_elements}")
         more["seam_elements"] = args.seam_elements or None
-    speech = PhysicsSettings.speech()
+    base = PhysicsSettings.speech()
     try:
-        saliva = dataclasses.replace(speech.saliva, **params)
+        saliva = dataclasses.replace(base.saliva, **params)
     except InputError as e:
         raise InputError(str(e).replace("moisture must", "--moisture must")
                          .replace("evaporation rate must", "--evaporation must")
                          .replace("saliva rupture time must", "--rupture-time must")) from None
-    return PhysicsSettings.speech(glue_profile=args.glue_profile, saliva=saliva, **more)
+    return dataclasses.replace(base, glue_profile=args.glue_profile, saliva=saliva, **more)
 
 
 def simulation_of(rig, track, physics: str, settings):

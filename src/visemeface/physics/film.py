@@ -39,6 +39,8 @@ from visemeface.physics.saliva import (DECAY_STEP, FILM_STIFF_STRETCH, SalivaPar
 #: Least number of film slabs across the mouth (issue 16: the open span grows in steps
 #: of at most 1/48 of the mouth, whatever the face mesh's resolution).
 FILM_ELEMENTS = 48
+#: The stretch Q of a slab folded over (J ≤ 0): larger than any real one.
+FOLDED = 1e300
 #: Damage at which a cohesive slab counts as snapped (its last 0.1 % of pull dropped; a
 #: first-order rupture approaches 1 only asymptotically).
 SNAPPED = 0.999
@@ -144,9 +146,9 @@ class SalivaFilm:
         return (1.0 - self.w[..., None]) * u[self.n0] + self.w[..., None] * u[self.n1]
 
     def stretch(self, u) -> np.ndarray:
-        """Q = C_yy at each slab's centre; 1e300 where a slab is folded over (J ≤ 0)."""
+        """Q = C_yy at each slab's centre; :data:`FOLDED` where a slab is folded over (J ≤ 0)."""
         F = deformation_gradient(self.slab_displacement(u), self.cgrads)
-        return np.where(np.linalg.det(F) > 0.0, stretch_across(F, self.axis), 1e300)
+        return np.where(np.linalg.det(F) > 0.0, stretch_across(F, self.axis), FOLDED)
 
     def front_gaps(self, u) -> np.ndarray:
         """Distance (m) between the lips at each slab's skin-side centre (nodes 6, 7 up; 4, 5 down)."""
@@ -165,9 +167,9 @@ class SalivaFilm:
                  "damage": np.zeros(E)}
         if u is not None:
             Q = self.stretch(u)
-            state["stretch"][:] = np.minimum(Q, 1e300)
+            state["stretch"][:] = np.minimum(Q, FOLDED)
             state["broken"][:] = Q >= self.breaking_points(t)
-            pressed = (Q < 1.0) | (Q >= 1e300)      # squeezed out between lips pressed or crossed at the start
+            pressed = (Q < 1.0) | (Q >= FOLDED)      # squeezed out between lips pressed or crossed at the start
             state["dry"][pressed] = True      # until they part to the film's thickness and it re-forms
             state["broken"][pressed] = True
         return state
@@ -326,8 +328,8 @@ def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, st
         J = (F[0, 0] * (F[1, 1] * F[2, 2] - F[1, 2] * F[2, 1]) - F[0, 1] * (F[1, 0] * F[2, 2] - F[1, 2] * F[2, 0])
              + F[0, 2] * (F[1, 0] * F[2, 1] - F[1, 1] * F[2, 0]))
         if J <= 0.0:
-            Q = 1e300                              # folded over: a broken film cannot push
-        if dry[k] and Q >= 1.0 and Q < 1e300:      # lips apart to the film's thickness: it re-forms
+            Q = FOLDED                              # folded over: a broken film cannot push
+        if dry[k] and Q >= 1.0 and Q < FOLDED:      # lips apart to the film's thickness: it re-forms
             dry[k] = False
             broken[k] = False
         if dry[k] or Q < squeeze:                  # squeezed out between pressed lips: no force
@@ -356,13 +358,13 @@ def _film_step(u, R, n0, n1, w, cgrads, grads, volumes, axis, Z, broken, dry, st
                     if soften <= 0.0:
                         stored[k, a, i] *= decay
                     pull[a, i] = stored[k, a, i] * fac   # the decaying pull, and contact
-        elif (strand > 0.0 or rupture > 0.0) and Q < 1e300 and (Qe >= Z[k] or damage[k] > 0.0):
+        elif (strand > 0.0 or rupture > 0.0) and Q < FOLDED and (Qe >= Z[k] or damage[k] > 0.0):
             damage[k] = _damage_step(Q, x, Z[k], damage[k], thick[k], strand, rupture, dt, modulus, lc)
             if damage[k] >= SNAPPED:
                 broken[k] = True                   # the strand has snapped: no pull from the next step
                 stored[k] = 0.0
             pull *= 1.0 - damage[k]
-        elif Qe >= Z[k] or Q >= 1e300:
+        elif Qe >= Z[k] or Q >= FOLDED:
             broken[k] = True                       # keep this step's pull, decay from the next
             for a in range(8):
                 for i in range(3):
