@@ -16,7 +16,10 @@ zipper      glue 0.08 vs elastic vs glue 0 (jaw ramp 0.35): where the first open
             seed 001's analysis; picture docs/images/sticky_zipper.png), time from the first
             opening to full width, elastic's share of full width within 2 frames, the power-law
             exponent of the centre opening height over the first opening; glue 0 == elastic
-merge       central glue 0.18 (seed 001): frames with two openings, then one
+merge       central glue 0.18 (seed 001) on the mouth's central twelfth: frames with two openings, then
+            one, and the open span's jump at the merge, at jaw 0.35 and on a mouth-opening action (jaw
+            eased to full over 1 s), film ending at the last seam pair and carried into the corners;
+            the opening action also in rendered video (picture docs/images/sticky_merge.png)
 glue03      glue 0.3: does it part at the seed's jaw 0.35, and at full jaw (1.0, same ramp) do the lips
             part fully, later than with the default glue?
 speech      "Bob moves five boats" and "set white with p two soon", sticky and elastic at 30 and 60 fps:
@@ -45,6 +48,8 @@ IMAGES = Path(__file__).resolve().parents[1] / "docs" / "images"
 RAMP = 0.0
 #: The zipper picture's file name in docs/images/ (``--image``).
 IMAGE = "sticky_zipper.png"
+#: The merge picture's file name in docs/images/ (``--merge-image``).
+MERGE_IMAGE = "sticky_merge.png"
 
 
 def emit(**kw):
@@ -142,14 +147,68 @@ def fig_zipper(fem, rig, fps, common):
     return runs
 
 
-def fig_merge(fem, rig, fps, common):
-    tr = zipper_track(rig, fps)
-    sim, frames = run(fem, rig, tr, "sticky", glue_profile="centre=0.18", **common)
+#: Seconds the jaw takes to open fully in the merge figure's mouth-opening action (seed 001 Figs. 22-26: the
+#: stuck centre lets go at about frame 45 of 60 while the mouth goes on opening; the paper gives no jaw
+#: timing). The two openings last 7-11 frames for any ramp from 0.6 s to 1.2 s (measured; README).
+MERGE_RAMP = 1.0
+
+
+def merge_measures(sim, frames, fps):
+    """Openings over a run with central glue: frames with two (film), the merge (the open span's largest
+    jump), the count after it, and whether that jump dominates (over twice the next)."""
     counts = [f["film_open_count"] for f in frames]
     spans = np.array([f["film_open_span"] for f in frames])
     d = np.diff(spans)
-    emit(figure="merge", fps=fps, frames_with_two=counts.count(2), counts=counts,
-         dominant_spike=bool(len(d) and d.max() > 2 * np.sort(d)[-2]) if len(d) > 1 else None)
+    k = int(np.argmax(d)) + 1 if len(d) else None
+    nxt = np.sort(d)[-2] if len(d) > 1 else 0.0
+    return {"frames_with_two": counts.count(2), "merge_frame": k, "count_after_merge": counts[k] if k is not None else None,
+            "dominant_spike": bool(len(d) > 1 and d.max() > 2 * nxt),
+            "spike_ratio": round(float(d.max() / nxt), 2) if nxt > 0 else None,
+            "counts": "".join(str(min(c, 9)) for c in counts)}
+
+
+def video_merge(fem, runs, fps):
+    """The merge runs seen as seed 001 saw them: ``visemeface analyze``'s seed method on rendered frames
+    (openings counted, the widest one's width), and a picture strip from before the two openings to after
+    the merge (docs/images/``--merge-image``: the speech lips above, the film into the corners below)."""
+    from visemeface.analysis.openings import OpeningDetector
+    from visemeface.analysis.profiles import analyze_frames
+    from visemeface.render.export import write_png
+    from visemeface.render.renderer import Renderer
+    r = Renderer(fem.face, size=(512, 512), view="mouth")
+    strips = []
+    for corners, (sim, frames, m) in runs.items():
+        imgs = [r.render(f["d"]) for f in frames]
+        prof = analyze_frames(imgs, r.mouth_box(), fps, OpeningDetector(method="seed"))
+        count, vw = prof["count"].to_numpy(), prof["width"].to_numpy()
+        dw = np.diff(vw)
+        emit(figure="merge_video", film_corners=corners, frames_with_two=int((count == 2).sum()),
+             counts="".join(str(min(int(c), 9)) for c in count), width_jump_frame=int(np.argmax(dw)) + 1,
+             width_jump_ratio=round(float(dw.max() / max(np.sort(dw)[-2], 1e-9)), 2))
+        k = m["merge_frame"]
+        first = m["counts"].find("2")
+        pick = sorted(set(np.linspace(max(first - 2, 0), min(k + 3, len(imgs) - 1), 8).round().astype(int)))
+        strips.append(np.concatenate([imgs[i][140:372] for i in pick], axis=1))
+    w = min(x.shape[1] for x in strips)
+    write_png(IMAGES / MERGE_IMAGE, np.concatenate([x[:, :w] for x in strips], axis=0)[::2, ::2].copy())
+
+
+def fig_merge(fem, rig, fps, common):
+    """Central glue 0.18 (seed 001's double opening): on the zipper's track (jaw held at 0.35), and on a
+    mouth-opening action (the jaw eased to full over :data:`MERGE_RAMP` s), each with the film ending at
+    the last seam pair (the speech commands' lips) and carried into the corners."""
+    tracks = {"jaw0.35": zipper_track(rig, fps), "opening": drive.ramp_track(rig.names, fps, 0.05, MERGE_RAMP, 0.2, 1.0)}
+    opening = {}
+    for name, tr in tracks.items():
+        for corners in (False, True):
+            sim, frames = run(fem, rig, tr, "sticky", glue_profile="centre=0.18", **{**common, "film_corners": corners})
+            m = merge_measures(sim, frames, fps)
+            emit(figure="merge", track=name, film_corners=corners, fps=fps, glue_slabs=int((sim.film.glue > 0.1).sum()),
+                 **m)
+            if name == "opening" and len(frames) == len(tr):
+                opening[corners] = (sim, frames, m)
+    if len(opening) == 2:
+        video_merge(fem, opening, fps)
 
 
 def fig_glue03(fem, rig, fps, common, runs):
@@ -265,6 +324,9 @@ def main():
     ap.add_argument("--seam-elements", type=int, default=None,
                     help="refine the lips to at least this many tissue elements along the seam (build_fem_face)")
     ap.add_argument("--image", default="sticky_zipper.png", help="zipper picture's name in docs/images/")
+    ap.add_argument("--merge-image", default="sticky_merge.png",
+                    help="merge picture's name in docs/images/ (README's is the speech lips': --seam-elements 48 "
+                         "--rupture-time 0.03)")
     ap.add_argument("--ramp", type=float, default=0.0,
                     help="zipper/glue03: seconds the jaw takes to open (0: seed scenario open-once)")
     ap.add_argument("--posture-hz", type=float, default=0.0, help="uniform posture spring (Hz, 0 = none)")
@@ -287,8 +349,8 @@ def main():
               "film_corners": args.film_corners, "dt": args.dt, "multirate": not args.single_rate}
     extra = {} if args.rupture_time is None else {"rupture_time": args.rupture_time}
     common["saliva"] = SalivaParams(soften=args.soften, viscosity=args.viscosity, strand=args.strand, **extra)
-    global RAMP, IMAGE
-    RAMP, IMAGE = args.ramp, args.image
+    global RAMP, IMAGE, MERGE_IMAGE
+    RAMP, IMAGE, MERGE_IMAGE = args.ramp, args.image, args.merge_image
     emit(figure="settings", resolution=args.resolution, seam_elements=k, fps=args.fps, soften=args.soften, viscosity=args.viscosity,
          ramp=args.ramp, rupture_time=common["saliva"].rupture_time, strand=args.strand,
          **{k: v for k, v in common.items() if k != "saliva"})

@@ -114,6 +114,36 @@ def test_lips_refined_along_the_seam_unzip_the_default_face_from_the_centre():
 
 
 @pytest.mark.slow
+def test_central_glue_holds_two_openings_apart_until_they_merge():
+    """Seed 001's double opening: central glue 0.18 on the mouth's central twelfth (``centre``,
+    glue.CENTRAL_HALF_WIDTH), the jaw eased to full over 1 s, the film carried into the corners (no free
+    end to open first). Two openings, one each side of the stuck centre, for 10 or more frames at 60 fps,
+    then one; the open span's jump at the merge is over twice any other frame's (seed 001 Fig. 26's one
+    spike). Measured: 10 frames, the merge at frame 42 (the paper: about 45), its jump 3.0x the next."""
+    from visemeface.face.procedural import default_face
+    from visemeface.runtime import set_threads
+    set_threads(1)
+    settings = drive.PhysicsSettings.speech(threads=1, film_corners=True, glue_profile="centre=0.18")
+    fem, rig = drive.physics_face(default_face(), seam_elements=settings.seam_elements)
+    track = drive.ramp_track(rig.names, FPS, 0.05, 1.0, 0.0, 1.0).iloc[:56]
+    sim = drive.StickySimulation(fem, rig, track, settings=settings)
+    s, glued = sim.film.s, sim.film.glue > 0.1
+    assert glued.sum() == 4 and np.abs(s[glued]).max() <= 1 / 12               # the central twelfth: 4 slabs
+    counts, spans, first = [], [], None
+    for fr in sim.frames():
+        counts.append(fr.saliva["film_open_count"])
+        spans.append(fr.saliva["film_open_span"])
+        if counts[-1] == 2 and first is None:
+            first = (sim.film.front_gaps(fr.displacement) - sim.film.rest_gap) / fem.mouth_width > 0.02
+    two = [i for i, c in enumerate(counts) if c == 2]
+    assert len(two) >= 10 and two == list(range(two[0], two[-1] + 1))    # two openings, 10 frames in a row
+    assert set(counts[:two[0]]) == {0} and set(counts[two[-1] + 1:]) == {1}   # none before, one after
+    assert first[s < -1 / 12].any() and first[s > 1 / 12].any() and not first[glued].any()   # either side
+    d = np.diff(spans)
+    assert int(np.argmax(d)) == two[-1] and d.max() > 2 * np.sort(d)[-2]   # one dominant jump, at the merge
+
+
+@pytest.mark.slow
 def test_speech_releases_a_bilabial_from_the_centre_over_frames():
     """``speak --physics sticky``'s lips on "bob" at 60 fps: the /b/ released into the vowel opens at the
     centre, no earlier than the elastic lips, and takes 2 or more frames to 90 % of its span (measured:

@@ -17,6 +17,12 @@ from visemeface.errors import InputError
 #: Seed 000 / 001 Table 1: the uniform glue and seed 001's central element's glue.
 GLUE = 0.08
 CENTRAL_GLUE = 0.18
+#: Half-width in s of the ``centre`` a glue profile names: the mouth's central twelfth (|s| ≤ 1/12).
+#: Seed 001 glues "one of the central elements" of its face; the seed-scale face (the default face,
+#: 12 saliva elements across) has elements 1/12 of the mouth wide. Named by width, not by element, so
+#: the stuck patch is the same size on a refined face or a film finer than the face (48 slabs: the
+#: slab nearest the centre alone is 1/48 of the mouth, a patch a quarter the seed's).
+CENTRAL_HALF_WIDTH = 1.0 / 12.0
 
 _ITEM = re.compile(r"^\s*([A-Za-z_]+|[-+]?\d*\.?\d+\s*\.\.\s*[-+]?\d*\.?\d+)\s*=\s*([^=]+?)\s*$")
 _NAMED = ("centre", "center", "left", "right", "corners", "all")
@@ -39,8 +45,9 @@ def parse_glue_profile(spec: str, s, base: float = GLUE) -> np.ndarray:
     ----------
     spec : str
         Comma-separated ``WHERE=VALUE`` items applied left to right over
-        ``base``. WHERE is ``all``; ``centre`` (the element(s) nearest the
-        mouth centre, ties included: seed 001's "central element");
+        ``base``. WHERE is ``all``; ``centre`` (the elements in the mouth's
+        central twelfth, |s| ≤ :data:`CENTRAL_HALF_WIDTH`: seed 001's "central
+        element"; the one(s) nearest the centre, ties included, if none is);
         ``left`` / ``right`` (the subject's left, s > 0 / right, s < 0);
         ``corners`` (|s| ≥ 0.7); or a range ``a..b`` of s. A bare number sets
         ``all``. Example: ``"centre=0.18"``, ``"left=0.2,-0.1..0.1=0"``.
@@ -81,7 +88,7 @@ def parse_glue_profile(spec: str, s, base: float = GLUE) -> np.ndarray:
             sel = (s >= a) & (s <= b)
         elif where in ("centre", "center"):
             d = np.abs(s)
-            sel = d <= d.min() + 1e-9 if len(s) else np.zeros(0, bool)
+            sel = d <= max(CENTRAL_HALF_WIDTH, d.min() + 1e-9) if len(s) else np.zeros(0, bool)
         elif where == "left":
             sel = s > 0
         elif where == "right":
