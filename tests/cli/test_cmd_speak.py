@@ -425,6 +425,21 @@ def test_speak_physics_bad_input_exits_2_before_simulating(short, capsys, coarse
     assert not (short / "tiny.mp4").exists()
 
 
+def test_the_speech_lips_glue_the_mouth_corners_unless_told_not_to():
+    """The film runs into the corners by default (no unglued corner notches); --no-film-corners gives the
+    seed's film, which ends at the last pair of lip vertices; --physics none refuses either."""
+    import argparse
+
+    from visemeface.commands._options import add_physics_arguments, physics_from_args
+    from visemeface.errors import InputError
+    p = argparse.ArgumentParser()
+    add_physics_arguments(p, "none", ("none", "sticky", "elastic"))
+    assert physics_from_args(p.parse_args(["--physics", "sticky"])).film_corners is True
+    assert physics_from_args(p.parse_args(["--physics", "sticky", "--no-film-corners"])).film_corners is False
+    with pytest.raises(InputError, match="--film-corners needs --physics"):
+        physics_from_args(p.parse_args(["--no-film-corners"]))
+
+
 def test_absurd_transcript_length_and_msaa_are_refused_before_work(short, capsys):
     (short / "huge.txt").write_text("0.0 20000 _\n20000 20000.2 aa\n")   # plausible phones, 5.6 h
     assert main(["speak", "huge.txt", "--size", "32", "-q"]) == 2

@@ -84,33 +84,41 @@ def test_lips_refined_along_the_seam_unzip_the_default_face_from_the_centre():
     """On the default face (12 tissue elements along the seam) the cohesive film parts from its free
     ends near the corners (or, carried into them, holds to jaw 0.35): its 48 slabs share the four
     edge nodes of their lip element. With the lips refined to one tissue element per slab
-    (``seam_elements=48``) the same film, ending at the last seam pair, unzips from the centre
-    while the jaw is held. These are the speech commands' lips (:meth:`PhysicsSettings.speech`)."""
+    (``seam_elements=48``) the film, carried into the corners, unzips from the centre while the jaw is
+    held at 0.35 and stops short of the corners, which stay joined (seed 000 Fig. 7: at a slight
+    opening sticky lips stay joined toward the corners; measured 0.71 of the mouth against elastic's
+    0.95); opened on to 0.6 the lips let go there too and end where the elastic lips do. These are the
+    speech commands' lips (:meth:`PhysicsSettings.speech`)."""
     from visemeface.face.procedural import default_face
+    from visemeface.physics.scenarios import make_track, smoothstep_keyframes
     from visemeface.runtime import set_threads
     set_threads(1)
     settings = drive.PhysicsSettings.speech(threads=1)
-    assert settings.seam_elements == 48 and settings.saliva.rupture_time == RUPTURE_TIME
+    assert settings.seam_elements == 48 and settings.saliva.rupture_time == RUPTURE_TIME and settings.film_corners
     fem, rig = drive.physics_face(default_face(), seam_elements=settings.seam_elements)
-    track = drive.ramp_track(rig.names, FPS, 0.05, 0.35, 0.75, 0.35)
+    t = np.arange(int(1.75 * FPS) + 1) / FPS
+    jaw = smoothstep_keyframes(t, [(0.0, 0.0), (0.05, 0.0), (0.40, 0.35), (1.15, 0.35), (1.35, 0.6), (1.75, 0.6)])
+    track = make_track(t, {"jaw": jaw}, rig.names, FPS)
+    held = int(1.15 * FPS)                                              # the last frame at jaw 0.35
     out = {}
     for physics in ("sticky", "elastic"):
         sim = drive.StickySimulation(fem, rig, track, physics=physics, settings=settings)
         assert sim.film.refine == 1                                     # one slab per tissue element
         out[physics] = [(fr.vertices, fr.saliva["film_open_span"], sim.film.front_gaps(fr.displacement)
                          - sim.film.rest_gap) for fr in sim.frames()]
-    spans = np.array([f[1] for f in out["sticky"]])
+    spans = np.array([f[1] for f in out["sticky"]])[:held + 1]
     k0 = int(np.flatnonzero(spans > 0)[0])
     k_full = int(np.flatnonzero(spans >= 0.95 * spans.max())[0])
     assert abs(sim.film.s[np.argmax(out["sticky"][k0][2])]) < 0.15       # first opening at the centre
     assert len(np.unique(np.round(spans[k0:k_full + 1], 4))) >= 8        # many widths ...
     assert (k_full - k0) / FPS >= 0.2 and np.all(np.diff(spans[k0:k_full + 1]) >= 0)   # ... over >= 0.2 s
-    es = np.array([f[1] for f in out["elastic"]])
+    es = np.array([f[1] for f in out["elastic"]])[:held + 1]
     e0 = int(np.flatnonzero(es > 0)[0])
-    assert e0 < k0 and es[e0 + 2] >= 0.8 * es.max() and spans.max() >= 0.95 * es.max()
+    assert e0 < k0 and es[e0 + 2] >= 0.8 * es.max()                      # elastic: earlier, most in 2 frames
+    assert spans.max() < 0.85 * es.max()                                # the corners stay joined at jaw 0.35
     lips = np.unique(np.concatenate([fem.face.region("upper_lip"), fem.face.region("lower_lip")]))
     d = out["sticky"][-1][0][lips] - out["elastic"][-1][0][lips]
-    assert np.sqrt(np.mean(np.sum(d * d, axis=1))) <= 0.01 * fem.mouth_width   # the same open mouth at the end
+    assert np.sqrt(np.mean(np.sum(d * d, axis=1))) <= 0.01 * fem.mouth_width   # the same open mouth at 0.6
 
 
 @pytest.mark.slow
@@ -242,7 +250,7 @@ def test_glue_0_3_parts_the_lips_fully_at_full_jaw_later_than_the_default_glue()
 
 @pytest.mark.slow
 def test_the_speech_lips_keep_the_seeds_asymmetry_and_evaporation():
-    """On the speech commands' lips (refined seam, rupture time), as on the seed's model
+    """On the speech commands' lips (refined seam, rupture time, film into the corners), as on the seed's model
     (test_sticky.py): glue on one side only opens the other side first, and a film that has dried
     (evaporation 600 a second) lets go fully at a smaller jaw later on (measured: 0.15 against 0.35)."""
     from visemeface.face.procedural import default_face
@@ -261,8 +269,13 @@ def test_the_speech_lips_keep_the_seeds_asymmetry_and_evaporation():
     assert op[fem.seam_s > 0].any() and not op[fem.seam_s < 0].any()
 
     def jaw_at_break(start):
-        track = drive.ramp_track(rig.names, 250, start, 0.08, 0.0, 0.35)
+        track = drive.ramp_track(rig.names, 250, start, 0.08, 0.3, 0.35)    # held: a strand snaps over ~7 τ
         fr = run(track, saliva=SalivaParams(evaporation=600.0, rupture_time=RUPTURE_TIME))
-        return track["jaw"].iloc[next(i for i, f in enumerate(fr) if f[1].all())]
+        return track["jaw"].iloc[next(i for i, f in enumerate(fr) if f[1][seam].all())]
+
+    # the film along the seam, not its wedges into the corners (the lips meet there: never stretched apart)
+    seam = np.abs(drive.StickySimulation(fem, rig, drive.ramp_track(rig.names, 250, 0.0, 0.02, 0.0, 0.0),
+                                         settings=drive.PhysicsSettings.speech(threads=1)).film.s) \
+        <= np.abs(fem.seam_s[fem.saliva_pairs]).max()
 
     assert jaw_at_break(0.12) < 0.8 * jaw_at_break(0.02)

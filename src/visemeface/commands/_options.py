@@ -121,8 +121,10 @@ def add_physics_arguments(p: argparse.ArgumentParser, default: str, choices: tup
                    "snap (default 0.03: the lips unzip from the centre; 0: the seed's brittle film)")
     g.add_argument("--seam-elements", type=int, metavar="N", help="refine the lips to N tissue elements along the "
                    "seam (default 48, one per saliva slab; 0: the face's own, the seed's mesh)")
-    g.add_argument("--film-corners", action="store_true", default=None,
-                   help="carry the saliva film into the mouth corners")
+    g.add_argument("--film-corners", action=argparse.BooleanOptionalAction, default=None,
+                   help="carry the saliva film into the mouth corners, where the lips meet (default: on; "
+                   "--no-film-corners ends it at the last pair of lip vertices, the seed's film, whose unglued "
+                   "corners open as notches while the rest is stuck)")
     return g
 
 
@@ -152,8 +154,8 @@ def physics_from_args(args, **more):
         params["critical_moisture"] = args.critical_moisture
     if getattr(args, "rupture_time", None) is not None:
         params["rupture_time"] = args.rupture_time
-    if getattr(args, "film_corners", None):
-        more["film_corners"] = True
+    if getattr(args, "film_corners", None) is not None:
+        more["film_corners"] = args.film_corners
     if args.glue is not None:
         if not (math.isfinite(args.glue) and args.glue >= 0):
             raise InputError(f"--glue must be >= 0 and finite, got {args.glue:g}")

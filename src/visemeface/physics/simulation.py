@@ -103,11 +103,15 @@ class PhysicsSettings:
         :data:`~visemeface.physics.saliva.RUPTURE_TIME` before they snap: the lips unzip from the
         centre over several frames. Without either, the seed's brittle film lets go along the whole
         seam in one frame (measured: ``scripts/sticky_figures.py``). ``RUPTURE_TIME`` is a value
-        chosen inside saliva's measured range for that zipper, not a measurement of lips.
+        chosen inside saliva's measured range for that zipper, not a measurement of lips. The film
+        runs on into the mouth corners (``film_corners``), where the lips meet: ended at the last
+        pair of lip vertices it leaves the corners unglued, and they open as dark notches while the
+        rest of the seam is stuck (on /f v/ and wide vowels in speech, and beside a held centre).
         """
         from visemeface.face.refine import SEAM_ELEMENTS
         from visemeface.physics.saliva import RUPTURE_TIME
-        base = {"seam_elements": SEAM_ELEMENTS, "saliva": SalivaParams(rupture_time=RUPTURE_TIME)}
+        base = {"seam_elements": SEAM_ELEMENTS, "saliva": SalivaParams(rupture_time=RUPTURE_TIME),
+                "film_corners": True}
         return cls(**{**base, **changes})
 
 
