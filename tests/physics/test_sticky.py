@@ -400,7 +400,7 @@ def test_same_equilibrium_with_and_without_glue_once_open_wide(model, opened):
 @pytest.mark.xfail(strict=True, reason="the seed's model (PhysicsSettings(), the unrefined face): its film's free ends "
                    "by the unglued corner slit carry 1.2-1.3x the centre's stretch and its brittle release cascades over "
                    "the seam in one frame; the speech commands' lips (PhysicsSettings.speech(): refined along the seam, "
-                   "rupture time) unzip the default face from the centre (test_zipper.py)")
+                   "rupture time, film into the corners) unzip the default face from the centre (test_zipper.py)")
 def test_sticky_lips_part_at_the_centre_first_and_later_than_elastic(model, opened):
     fem, _ = model
     s_frames = opened["sticky"][1]
