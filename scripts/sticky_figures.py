@@ -162,7 +162,7 @@ def merge_measures(sim, frames, fps):
     k = int(np.argmax(d)) + 1 if len(d) else None
     nxt = np.sort(d)[-2] if len(d) > 1 else 0.0
     return {"frames_with_two": counts.count(2), "merge_frame": k, "count_after_merge": counts[k] if k is not None else None,
-            "dominant_spike": bool(len(d) > 1 and d.max() > 2 * nxt),
+            "dominant_spike": bool(len(d) > 1 and d.max() > 0 and d.max() > 2 * max(nxt, 0.0)),
             "spike_ratio": round(float(d.max() / nxt), 2) if nxt > 0 else None,
             "counts": "".join(str(min(c, 9)) for c in counts)}
 
@@ -170,7 +170,8 @@ def merge_measures(sim, frames, fps):
 def video_merge(fem, runs, fps):
     """The merge runs seen as seed 001 saw them: ``visemeface analyze``'s seed method on rendered frames
     (openings counted, the widest one's width), and a picture strip from before the two openings to after
-    the merge (docs/images/``--merge-image``: the speech lips above, the film into the corners below)."""
+    the merge (docs/images/``--merge-image``: the film ending at the last seam pair above, the speech lips,
+    the film carried into the corners, below)."""
     from visemeface.analysis.openings import OpeningDetector
     from visemeface.analysis.profiles import analyze_frames
     from visemeface.render.export import write_png
@@ -184,7 +185,7 @@ def video_merge(fem, runs, fps):
         dw = np.diff(vw)
         emit(figure="merge_video", film_corners=corners, frames_with_two=int((count == 2).sum()),
              counts="".join(str(min(int(c), 9)) for c in count), width_jump_frame=int(np.argmax(dw)) + 1,
-             width_jump_ratio=round(float(dw.max() / max(np.sort(dw)[-2], 1e-9)), 2))
+             width_jump_ratio=round(float(dw.max() / np.sort(dw)[-2]), 2) if np.sort(dw)[-2] > 0 else None)
         k = m["merge_frame"]
         first = m["counts"].find("2")
         pick = sorted(set(np.linspace(max(first - 2, 0), min(k + 3, len(imgs) - 1), 8).round().astype(int)))
@@ -196,7 +197,7 @@ def video_merge(fem, runs, fps):
 def fig_merge(fem, rig, fps, common):
     """Central glue 0.18 (seed 001's double opening): on the zipper's track (jaw held at 0.35), and on a
     mouth-opening action (the jaw eased to full over :data:`MERGE_RAMP` s), each with the film ending at
-    the last seam pair (the speech commands' lips) and carried into the corners."""
+    the last seam pair (``--no-film-corners``) and carried into the corners (the speech commands' lips)."""
     tracks = {"jaw0.35": zipper_track(rig, fps), "opening": drive.ramp_track(rig.names, fps, 0.05, MERGE_RAMP, 0.2, 1.0)}
     opening = {}
     for name, tr in tracks.items():

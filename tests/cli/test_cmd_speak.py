@@ -436,7 +436,7 @@ def test_the_speech_lips_glue_the_mouth_corners_unless_told_not_to():
     add_physics_arguments(p, "none", ("none", "sticky", "elastic"))
     assert physics_from_args(p.parse_args(["--physics", "sticky"])).film_corners is True
     assert physics_from_args(p.parse_args(["--physics", "sticky", "--no-film-corners"])).film_corners is False
-    with pytest.raises(InputError, match="--film-corners needs --physics"):
+    with pytest.raises(InputError, match="--no-film-corners needs --physics"):
         physics_from_args(p.parse_args(["--no-film-corners"]))
 
 

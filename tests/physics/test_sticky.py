@@ -280,6 +280,9 @@ def test_glue_file_layouts(tmp_path):
     np.testing.assert_allclose(sv.read_glue_file(p, np.array([-0.5, 0.0, 0.25])), [0.1, 0.2, 0.15])
     p.write_text("element,glue\n" + "".join(f"{i},{i / 10}\n" for i in range(3)))
     np.testing.assert_allclose(sv.read_glue_file(p, np.zeros(3)), [0.0, 0.1, 0.2])
+    # element k is the k-th from the right corner, whatever order the film lists its slabs in (its
+    # wedges into the corners come last)
+    np.testing.assert_allclose(sv.read_glue_file(p, np.array([0.0, -0.9, 0.9])), [0.1, 0.0, 0.2])
     p.write_text("element,glue\n0,0.1\n7,0.2\n")
     with pytest.raises(InputError, match="element 7 names no saliva element"):
         sv.read_glue_file(p, np.zeros(3))

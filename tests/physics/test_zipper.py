@@ -127,7 +127,8 @@ def test_central_glue_holds_two_openings_apart_until_they_merge():
     glue.CENTRAL_HALF_WIDTH), the jaw eased to full over 1 s, the film carried into the corners (no free
     end to open first). Two openings, one each side of the stuck centre, for 10 or more frames at 60 fps,
     then one; the open span's jump at the merge is over twice any other frame's (seed 001 Fig. 26's one
-    spike). Measured: 10 frames, the merge at frame 42 (the paper: about 45), its jump 3.0x the next."""
+    spike). Measured: 10 frames, the merge at frame 42 (the paper: about 45), its jump 3.0x the next;
+    also 10 with the jaw taking 0.95 or 1.05 s and single-rate at 3.6e-5 s, 11 at 1.1 s."""
     from visemeface.face.procedural import default_face
     from visemeface.runtime import set_threads
     set_threads(1)

@@ -139,6 +139,7 @@ def physics_from_args(args, **more):
 
     given = [f"--{n.replace('_', '-')}" for n in ("glue", "glue_profile", "moisture", "evaporation", "rupture_time",
                                                   "seam_elements", "film_corners") if getattr(args, n, None) is not None]
+    given = ["--no-film-corners" if g == "--film-corners" and args.film_corners is False else g for g in given]
     if args.physics == "none":
         if given:
             raise InputError(f"{given[0]} needs --physics sticky or elastic")

@@ -34,8 +34,8 @@ over 0.03 s before they snap, and the film runs into the mouth corners (issue 16
 film, which parts in one frame).
 
 Writes OUTPUT (MP4) and OUTPUT's stem + .saliva.csv (--csv; per frame: time,
-jaw, broken fraction, number and span of openings along the seam, centre gap,
-largest stretch). The state is saved after every frame in OUTPUT.checkpoint/,
+jaw, broken fraction of the film along the seam, number and span of openings
+along the seam, centre gap, largest stretch). The state is saved after every frame in OUTPUT.checkpoint/,
 removed when the run completes. Glue profiles: WHERE=VALUE items over --glue,
 WHERE one of centre, left, right, corners, all or a range a..b of the position
 across the mouth (-1 right corner .. +1 left corner). Exit status 3: the
@@ -54,8 +54,8 @@ def register(subparsers) -> None:
     p.add_argument("scenario", choices=sorted(SCENARIOS), help="open: opened and closed twice; open-once: "
                    "opened and held; part: a slight opening")
     phys = opt.add_physics_arguments(p, "sticky", tuple(PHYSICS))
-    phys.add_argument("--glue-file", type=Path, metavar="CSV", help="glue per element (element,glue) or "
-                      "profile (s,glue)")
+    phys.add_argument("--glue-file", type=Path, metavar="CSV", help="glue per film element (element,glue; "
+                      "0 at the right corner, in order across the mouth) or a profile (s,glue)")
     phys.add_argument("--critical-moisture", type=float, metavar="MC", help="critical moisture Mc (default 100)")
     phys.add_argument("--dt", type=float, help="one time step in s for every node (default: multi-rate, the "
                       "tissue's stable step with the lips' film nodes in substeps at the film's, printed at the "

@@ -21,7 +21,7 @@ CENTRAL_GLUE = 0.18
 #: Seed 001 glues "one of the central elements" of its face; the seed-scale face (the default face,
 #: 12 saliva elements across) has elements 1/12 of the mouth wide. Named by width, not by element, so
 #: the stuck patch is the same size on a refined face or a film finer than the face (48 slabs: the
-#: slab nearest the centre alone is 1/48 of the mouth, a patch a quarter the seed's).
+#: two slabs nearest the centre are 1/24 of the mouth, a patch half the seed's).
 CENTRAL_HALF_WIDTH = 1.0 / 12.0
 
 _ITEM = re.compile(r"^\s*([A-Za-z_]+|[-+]?\d*\.?\d+\s*\.\.\s*[-+]?\d*\.?\d+)\s*=\s*([^=]+?)\s*$")
@@ -88,7 +88,7 @@ def parse_glue_profile(spec: str, s, base: float = GLUE) -> np.ndarray:
             sel = (s >= a) & (s <= b)
         elif where in ("centre", "center"):
             d = np.abs(s)
-            sel = d <= max(CENTRAL_HALF_WIDTH, d.min() + 1e-9) if len(s) else np.zeros(0, bool)
+            sel = d <= max(CENTRAL_HALF_WIDTH, d.min()) + 1e-9 if len(s) else np.zeros(0, bool)
         elif where == "left":
             sel = s > 0
         elif where == "right":
@@ -112,8 +112,11 @@ def read_glue_file(path, s) -> np.ndarray:
 
     Two layouts (header line required):
 
-    * ``element,glue``: one row per element index (0-based, along the seam
-      from the subject's right corner); every element must be given.
+    * ``element,glue``: one row per element index (0-based, in order across
+      the mouth from the subject's right corner: element k is the one with the
+      k-th smallest ``s``); every element must be given. With the film carried
+      into the mouth corners (the speech lips) its wedges count too, first and
+      last (50 elements on the default face).
     * ``s,glue``: a profile across the mouth (s from −1, right corner, to +1,
       left corner), linearly interpolated at the element centres ``s``.
     """
@@ -156,7 +159,9 @@ def read_glue_file(path, s) -> np.ndarray:
         glue[idx] = vals
         if np.isnan(glue).any():
             raise InputError(f"missing elements {np.flatnonzero(np.isnan(glue))[:5].tolist()}", path)
-        return glue
+        out = np.empty(len(s))
+        out[np.argsort(s, kind="stable")] = glue             # element k: the k-th from the right corner
+        return out
     order = np.argsort(keys)
     return np.interp(s, keys[order], vals[order])
 

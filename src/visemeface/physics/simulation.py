@@ -72,7 +72,8 @@ class PhysicsSettings:
     (:func:`~visemeface.physics.face_model.build_fem_face`); None: the face's own elements.
 
     These defaults are the seed's model. The speech commands run :meth:`speech`: the same with the
-    lips refined along the seam and saliva strands that thin before they snap (issue 16).
+    lips refined along the seam, saliva strands that thin before they snap, and the film carried into
+    the mouth corners (issue 16).
     """
 
     dt: float | None = None
@@ -251,6 +252,8 @@ class StickySimulation:
             per_layer += len(fem.corner_hexes) // max(len(fem.saliva) // max(per_layer, 1), 1)
         self.film = SalivaFilm(mesh.nodes, hexes, ends, glue, settings.saliva, across=per_layer,
                                min_elements=settings.film_elements)
+        #: The film's slabs along the seam (its wedges into the corners, where the lips meet, come after).
+        self.seam_slabs = slice(0, len(fem.saliva) * self.film.refine)
         self.stability = face_stable_step(mesh, fem.tissue, self.film, hourglass_kappa=settings.hourglass_kappa)
         film_dt = self.stability["dt"]
         from visemeface.physics.hexmesh import HexMesh
@@ -303,11 +306,12 @@ class StickySimulation:
         return self.state.saliva["broken"]
 
     def saliva_state(self, vertices, u) -> dict:
-        """Per-frame saliva measures: broken fraction, openings along the seam (mesh) and the film."""
+        """Per-frame saliva measures: broken fraction (of the film along the seam: the wedges into the
+        corners are left out), openings along the seam (mesh) and the film."""
         op = seam_openings(self.fem, vertices, self.rest_gaps)
         film = film_openings(self.film, u, self.fem.mouth_width)
         sal = self.state.saliva
-        return {"broken_fraction": float(sal["broken"].mean()), "open_count": op["count"],
+        return {"broken_fraction": float(sal["broken"][self.seam_slabs].mean()), "open_count": op["count"],
                 "open_span": op["span"], "open_fraction": op["open_fraction"], "centre_gap": op["centre_gap"],
                 "max_stretch": float(np.minimum(sal["stretch"], 1e9).max()),
                 "film_open_count": film["count"], "film_open_span": film["span"]}
