@@ -21,7 +21,7 @@ EPILOG = """\
 examples:
   visemeface simulate open --glue 0.08 -o open.mp4        # jaw lowered and raised twice (seed 001 Fig. 18)
   visemeface simulate open --physics elastic -o open_elastic.mp4   # the same FEM without glue
-  visemeface simulate open-once -o zip.mp4               # the lips unzip from the centre over about 0.5 s
+  visemeface simulate open-once -o zip.mp4               # the lips unzip from the centre (0.55 of the mouth by its end)
   visemeface simulate open-once --rupture-time 0 --seam-elements 0 --no-film-corners -o seed.mp4   # the seed's model
   visemeface simulate open-once --glue-profile centre=0.18 -o two.mp4   # glue strongest at the centre
   visemeface simulate open --evaporation 40 -o dry.mp4    # later openings unzip faster
