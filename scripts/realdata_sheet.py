@@ -21,7 +21,7 @@ with the openings the project's analysis finds outlined.
 Usage::
 
     PYTHONPATH=src python scripts/realdata_sheet.py [--realdata ../shared/realdata] [-o docs/images/realdata.png]
-    PYTHONPATH=src python scripts/realdata_sheet.py --releases -o docs/images/realdata_releases.png
+    PYTHONPATH=src python scripts/realdata_sheet.py --releases [-o docs/images/realdata_releases.png]
 """
 
 from __future__ import annotations
@@ -124,15 +124,24 @@ def interior_fractions(real, ours, centre, mouth_w, our_centre, our_w, span) -> 
 
 def main(argv=None) -> int:
     from visemeface.commands.sheet import compose_sheet
-    from visemeface.outputs import atomic_output
+    from visemeface.errors import InputError
+    from visemeface.outputs import atomic_output, check_new
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--realdata", type=Path, default=Path(__file__).resolve().parents[2] / "shared" / "realdata")
-    ap.add_argument("-o", "--output", type=Path, default=Path("docs/images/realdata.png"))
+    ap.add_argument("-o", "--output", type=Path, help="default: docs/images/realdata.png, with --releases "
+                    "docs/images/realdata_releases.png")
     ap.add_argument("--force", action="store_true")
     ap.add_argument("--releases", action="store_true", help="a bilabial release per clip: real, the seed's sticky "
                     "model, the speech commands' sticky lips (12 frames each)")
     args = ap.parse_args(argv)
+    args.output = args.output or Path("docs/images/realdata_releases.png" if args.releases else "docs/images/realdata.png")
+    args.output.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        check_new(args.output, args.force)            # before minutes of rendering, not after
+    except InputError as e:
+        print(f"realdata_sheet: {e}", file=sys.stderr)
+        return 2
     import warnings
 
     from visemeface.analysis.openings import OpeningDetector
@@ -177,7 +186,6 @@ def main(argv=None) -> int:
     sheet = compose_sheet(tiles, labels, columns=12 if args.releases else SHOWN)
     from PIL import Image
 
-    args.output.parent.mkdir(parents=True, exist_ok=True)
     with atomic_output(args.output, args.force) as tmp:
         Image.fromarray(sheet).save(tmp, format="PNG", optimize=True)
     print(f"wrote {args.output}")

@@ -94,18 +94,36 @@ def zipper_measures(sim, frames, fps):
             "spans": np.round(spans[k0:k_full + 1], 3)}
 
 
-def video_zipper(fem, runs, fps):
-    """Seed-001 analysis of rendered frames (``visemeface analyze``'s profile) and a picture strip."""
+def seen_in_video(renderer, frames, fps):
+    """The run's frames rendered (mouth view) and ``visemeface analyze``'s profile of them by seed 001's
+    method: (images, profile)."""
     from visemeface.analysis.openings import OpeningDetector
     from visemeface.analysis.profiles import analyze_frames
+    imgs = [renderer.render(f["d"]) for f in frames]
+    return imgs, analyze_frames(imgs, renderer.mouth_box(), fps, OpeningDetector(method="seed"))
+
+
+def strip(imgs, first: int, last: int):
+    """8 frames from ``first`` to ``last`` (clipped to the run), side by side, cut to the mouth."""
+    pick = sorted(set(np.linspace(max(first, 0), min(last, len(imgs) - 1), 8).round().astype(int)))
+    return np.concatenate([imgs[i][140:372] for i in pick], axis=1)
+
+
+def write_strips(strips, name: str) -> None:
+    """The strips one above the other, at half size, as docs/images/``name``."""
     from visemeface.render.export import write_png
+    w = min(x.shape[1] for x in strips)
+    IMAGES.mkdir(parents=True, exist_ok=True)
+    write_png(IMAGES / name, np.concatenate([x[:, :w] for x in strips], axis=0)[::2, ::2].copy())
+
+
+def video_zipper(fem, runs, fps):
+    """Seed-001 analysis of rendered frames (``visemeface analyze``'s profile) and a picture strip."""
     from visemeface.render.renderer import Renderer
     r = Renderer(fem.face, size=(512, 512), view="mouth")
     strips = []
     for name in ("sticky", "elastic"):
-        frames = runs[name][1]
-        imgs = [r.render(f["d"]) for f in frames]
-        prof = analyze_frames(imgs, r.mouth_box(), fps, OpeningDetector(method="seed"))   # seed 001's method
+        imgs, prof = seen_in_video(r, runs[name][1], fps)
         vw = prof["width"].to_numpy()
         opened = np.flatnonzero(vw > 0)
         first = int(opened[0]) if len(opened) else None
@@ -115,11 +133,8 @@ def video_zipper(fem, runs, fps):
              distinct_widths=int(len(np.unique(np.round(vw[vw > 0], 3)))))
         k = first if first is not None else len(imgs) // 2
         last = full if full is not None else k + 5
-        pick = sorted(set(np.linspace(max(k - 1, 0), min(max(last + 1, k + 6), len(imgs) - 1), 8).round().astype(int)))
-        strips.append(np.concatenate([imgs[i][140:372] for i in pick], axis=1))
-    w = min(x.shape[1] for x in strips)
-    IMAGES.mkdir(parents=True, exist_ok=True)
-    write_png(IMAGES / IMAGE, np.concatenate([x[:, :w] for x in strips], axis=0)[::2, ::2].copy())
+        strips.append(strip(imgs, k - 1, max(last + 1, k + 6)))
+    write_strips(strips, IMAGE)
 
 
 def zipper_track(rig, fps):
@@ -172,26 +187,18 @@ def video_merge(fem, runs, fps):
     (openings counted, the widest one's width), and a picture strip from before the two openings to after
     the merge (docs/images/``--merge-image``: the film ending at the last seam pair above, the speech lips,
     the film carried into the corners, below)."""
-    from visemeface.analysis.openings import OpeningDetector
-    from visemeface.analysis.profiles import analyze_frames
-    from visemeface.render.export import write_png
     from visemeface.render.renderer import Renderer
     r = Renderer(fem.face, size=(512, 512), view="mouth")
     strips = []
     for corners, (sim, frames, m) in runs.items():
-        imgs = [r.render(f["d"]) for f in frames]
-        prof = analyze_frames(imgs, r.mouth_box(), fps, OpeningDetector(method="seed"))
+        imgs, prof = seen_in_video(r, frames, fps)
         count, vw = prof["count"].to_numpy(), prof["width"].to_numpy()
         dw = np.diff(vw)
         emit(figure="merge_video", film_corners=corners, frames_with_two=int((count == 2).sum()),
              counts="".join(str(min(int(c), 9)) for c in count), width_jump_frame=int(np.argmax(dw)) + 1,
              width_jump_ratio=round(float(dw.max() / np.sort(dw)[-2]), 2) if np.sort(dw)[-2] > 0 else None)
-        k = m["merge_frame"]
-        first = m["counts"].find("2")
-        pick = sorted(set(np.linspace(max(first - 2, 0), min(k + 3, len(imgs) - 1), 8).round().astype(int)))
-        strips.append(np.concatenate([imgs[i][140:372] for i in pick], axis=1))
-    w = min(x.shape[1] for x in strips)
-    write_png(IMAGES / MERGE_IMAGE, np.concatenate([x[:, :w] for x in strips], axis=0)[::2, ::2].copy())
+        strips.append(strip(imgs, m["counts"].find("2") - 2, m["merge_frame"] + 3))
+    write_strips(strips, MERGE_IMAGE)
 
 
 def fig_merge(fem, rig, fps, common):

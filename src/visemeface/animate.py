@@ -49,11 +49,9 @@ def simulated_motion(rig, track, physics: str, settings=None):
     default to :meth:`PhysicsSettings.speech` (the lips refined along the seam: the motion renders
     the refined face and writes ``rig.face``'s vertices, its first ones)."""
     from visemeface.motion import SimulatedMotion
-    from visemeface.physics.drive import PhysicsSettings, StickySimulation, physics_face
+    from visemeface.physics.drive import face_simulation
 
-    settings = settings or PhysicsSettings.speech()
-    fem, fine_rig = physics_face(rig.face, rig, seam_elements=settings.seam_elements)
-    return SimulatedMotion(StickySimulation(fem, fine_rig, track, physics=physics, settings=settings), face=rig.face)
+    return SimulatedMotion(face_simulation(rig.face, rig, track, physics, settings), face=rig.face)
 
 
 def animate(utterance, sinks: list, render=None, *, rig=None, emotions=None, interp: str | None = None,

@@ -137,9 +137,9 @@ def physics_from_args(args, **more):
     """:class:`PhysicsSettings` of the options (checked), or None for ``--physics none``."""
     from visemeface.errors import InputError
 
-    given = [f"--{n.replace('_', '-')}" for n in ("glue", "glue_profile", "moisture", "evaporation", "rupture_time",
-                                                  "seam_elements", "film_corners") if getattr(args, n, None) is not None]
-    given = ["--no-film-corners" if g == "--film-corners" and args.film_corners is False else g for g in given]
+    given = [f"--{'no-' if getattr(args, n) is False else ''}{n.replace('_', '-')}"       # as typed
+             for n in ("glue", "glue_profile", "moisture", "evaporation", "rupture_time", "seam_elements",
+                       "film_corners") if getattr(args, n, None) is not None]
     if args.physics == "none":
         if given:
             raise InputError(f"{given[0]} needs --physics sticky or elastic")

@@ -238,4 +238,5 @@ class FaceDrive:
 
 
 from visemeface.physics.simulation import (MIN_JACOBIAN, PHYSICS, TERMS, PhysicsSettings,  # noqa: E402,F401
-                                           SimFrame, StickySimulation, physics_face, simulate_track)
+                                           SimFrame, StickySimulation, face_simulation, physics_face,
+                                           simulate_track)

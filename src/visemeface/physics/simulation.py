@@ -454,18 +454,25 @@ def physics_face(face, rig=None, fem=None, seam_elements: int | None = None):
     return fem, rig
 
 
+def face_simulation(face, rig, track: pd.DataFrame, physics: str = "sticky",
+                    settings: PhysicsSettings | None = None, fem=None) -> StickySimulation:
+    """The FEM face of ``face`` driven by ``track`` (every input checked before any step): ``settings``
+    default to :meth:`PhysicsSettings.speech`, the FEM and the rig come from :func:`physics_face` (the lips
+    refined to ``settings.seam_elements``; the refined face's first vertices are ``face``'s)."""
+    settings = settings or PhysicsSettings.speech()
+    fem, rig = physics_face(face, rig, fem, settings.seam_elements)
+    return StickySimulation(fem, rig, track, physics=physics, settings=settings)
+
+
 def simulate_track(face, rig, track: pd.DataFrame, physics: str = "sticky",
                    settings: PhysicsSettings | None = None, fem=None, states: list | None = None):
     """Animate ``track`` on the FEM face: an iterator of float32 (N, 3) display vertices of ``face`` per track row.
 
     The kinematic path's drop-in for ``--physics sticky|elastic`` (lips' rest gap
-    drawn closed, :meth:`FEMFace.display_vertices`; ``settings`` default to :meth:`PhysicsSettings.speech`,
-    whose refined lips' first vertices are ``face``'s). All input checks run before
-    the first frame. ``states``, if given, collects each frame's saliva measures.
+    drawn closed, :meth:`FEMFace.display_vertices`; the simulation is :func:`face_simulation`'s). All input
+    checks run before the first frame. ``states``, if given, collects each frame's saliva measures.
     """
-    settings = settings or PhysicsSettings.speech()
-    fem, rig = physics_face(face, rig, fem, settings.seam_elements)
-    sim = StickySimulation(fem, rig, track, physics=physics, settings=settings)
+    sim = face_simulation(face, rig, track, physics, settings, fem)
     n = face.n_vertices
 
     def frames():
