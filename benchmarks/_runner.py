@@ -53,10 +53,11 @@ def child(argv: list[str]) -> None:
                       "load1": os.getloadavg()[0]}))
 
 
-def run_child(script: str, argv: list[str]) -> tuple[dict, float]:
-    """Run ``script --child argv`` in a fresh Python (src/ on its path); (its JSON line, wall seconds)."""
+def run_child(script: str, argv: list[str], src: str | Path | None = None) -> tuple[dict, float]:
+    """Run ``script --child argv`` in a fresh Python with ``src`` (default: this checkout's src/) first on
+    its path, so another version's package can be timed; (its JSON line, wall seconds)."""
     env = dict(os.environ)
-    src = str(Path(__file__).resolve().parents[1] / "src")
+    src = str(src or Path(__file__).resolve().parents[1] / "src")
     env["PYTHONPATH"] = src + os.pathsep + env.get("PYTHONPATH", "")
     t0 = time.perf_counter()
     proc = subprocess.run([sys.executable, script, "--child", json.dumps(argv)], capture_output=True, text=True,
