@@ -33,13 +33,40 @@ def _umask_mode(mode: int) -> int:
     return mode & ~umask
 
 
-def check_new(path: str | Path, force: bool = False, folder: bool | None = None) -> Path:
+#: What visemeface's folder outputs hold: frame files (PNG, OBJ), the OBJ sequence's palette and
+#: hidden manifests (``.visemeface-frames.json``); staged temporaries (:func:`is_temporary`) too.
+_OURS = re.compile(r"^(frame_\d+\.[A-Za-z0-9]+|face\.mtl|\.visemeface.*)$")
+
+
+def holds_only_ours(folder: str | Path) -> bool:
+    """True if every entry of ``folder`` is a file a visemeface folder output writes (:data:`_OURS`):
+    the folders ``--force`` may replace, so a user's own files in them are never deleted."""
+    return all((_OURS.match(p.name) or is_temporary(p)) and p.is_file() for p in Path(folder).iterdir())
+
+
+def output_path(path: str | Path) -> Path:
+    """``path`` as a Path with a name: ``.`` and ``..`` (which name no file) made absolute."""
+    path = Path(path)
+    return Path(os.path.abspath(path)) if path.name in ("", "..") else path
+
+
+def _holds_cwd(path: Path) -> bool:
+    try:
+        cwd = Path.cwd().resolve()
+    except OSError:
+        return False
+    return cwd == path.resolve() or path.resolve() in cwd.parents
+
+
+def check_new(path: str | Path, force: bool = False, folder: bool | None = None, ours=holds_only_ours) -> Path:
     """Return ``path`` as a Path; refuse it if it exists and ``force`` is false.
 
     ``folder`` True/False also refuses replacing a file by a folder or a folder by
-    a file (even with ``force``: that is almost always a typo).
+    a file (even with ``force``: that is almost always a typo). An existing folder is
+    replaced (``folder`` True) only if ``ours(path)``: by default, if it holds nothing
+    but what visemeface writes there (:func:`holds_only_ours`).
     """
-    path = Path(path)
+    path = output_path(path)
     if path.exists() or path.is_symlink():
         if not force:
             raise InputError("output exists; use --force to overwrite (force=True in Python)", path)
@@ -47,6 +74,11 @@ def check_new(path: str | Path, force: bool = False, folder: bool | None = None)
             raise InputError("output exists and is a folder, not a file", path)
         if folder is True and not path.is_dir():
             raise InputError("output exists and is a file, not a folder", path)
+        if folder is True and _holds_cwd(path):
+            raise InputError("output folder is the current folder or holds it; name a new folder", path)
+        if folder is True and not ours(path):
+            raise InputError("output folder holds files visemeface did not write; --force replaces only "
+                             "a folder of ours: move them or choose another folder", path)
     parent = path.parent
     if not parent.exists():
         raise InputError("output folder does not exist", parent)
@@ -115,14 +147,16 @@ class Staged:
         Replace an existing target (of the same kind).
     folder : bool
         Stage a folder instead of a file.
+    ours : callable
+        For a folder: whether an existing one may be replaced (:func:`check_new`).
 
     The target is checked when the object is made (before any work); :meth:`open`
     creates the temporary (removing stale ones of the same target) and returns it;
     :meth:`commit` renames it into place; :meth:`abort` removes it.
     """
 
-    def __init__(self, path: str | Path, force: bool = False, folder: bool = False):
-        self.path = check_new(path, force, folder=folder)
+    def __init__(self, path: str | Path, force: bool = False, folder: bool = False, ours=holds_only_ours):
+        self.path = check_new(path, force, folder=folder, ours=ours)
         self.force, self.folder = force, folder
         self.tmp: Path | None = None
 

@@ -85,3 +85,46 @@ def test_wrong_output_suffix_is_refused_before_work(tmp_path, monkeypatch, capsy
     assert main(argv) == 2
     assert "must end in" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["in.mp4"]
+
+
+def test_force_replaces_a_folder_of_ours_but_never_a_users_files(tmp_path):
+    ours = tmp_path / "frames"
+    ours.mkdir()
+    for name in ("frame_000000.png", "frame_000001.obj", "face.mtl", ".visemeface-frames.json"):
+        (ours / name).write_bytes(b"old")
+    with atomic_dir(ours, force=True) as tmp:
+        (tmp / "frame_000000.png").write_bytes(b"new")
+    assert sorted(p.name for p in ours.iterdir()) == ["frame_000000.png"]
+    (ours / "thesis.txt").write_text("a user's own file")
+    with pytest.raises(InputError, match="holds files visemeface did not write"):
+        with atomic_dir(ours, force=True):
+            pass
+    assert (ours / "thesis.txt").read_text() == "a user's own file"
+
+
+def test_speak_force_into_the_transcripts_own_folder_deletes_nothing(tmp_path, monkeypatch, capsys):
+    from visemeface.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    work = tmp_path / "work"
+    work.mkdir()
+    (work / "b.txt").write_text("0.0 0.1 b\n0.1 0.3 aa\n")
+    (work / "notes.md").write_text("mine")
+    assert main(["speak", "work/b.txt", "--no-video", "--frames", "work", "--force", "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "did not write" in err
+    assert sorted(p.name for p in work.iterdir()) == ["b.txt", "notes.md"]
+
+
+@pytest.mark.parametrize("folder", [".", ".."])
+def test_the_current_folder_is_never_an_output_folder(tmp_path, monkeypatch, capsys, folder):
+    from visemeface.cli import main
+
+    here = tmp_path / "here"
+    here.mkdir()
+    monkeypatch.chdir(here)
+    (tmp_path / "b.txt").write_text("0.0 0.1 b\n0.1 0.3 aa\n")
+    assert main(["speak", str(tmp_path / "b.txt"), "--no-video", "--frames", folder, "--force", "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "current folder" in err
+    assert here.is_dir() and list(here.iterdir()) == []

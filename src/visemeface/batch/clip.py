@@ -67,9 +67,9 @@ def _utterance(job: Job):
         from visemeface.speech.transcripts import read_utterance
 
         return read_utterance(job.transcript, rate_wpm=job.rate, audio=job.audio)
-    from visemeface.speech.g2p import text_to_utterance
+    from visemeface.speech.transcripts import timed_text
 
-    return text_to_utterance(job.text, rate_wpm=job.rate, audio=job.audio)
+    return timed_text(job.text, job.rate, job.audio)
 
 
 def _make(job: Job, folder: Path, force: bool) -> int:
@@ -85,7 +85,7 @@ def _make(job: Job, folder: Path, force: bool) -> int:
     render = RenderSettings(size=job.size, view=job.view, msaa=job.msaa).check()
     utterance = _utterance(job)
     rig = _rig(job.face, job.landmarks, job.rig)
-    staged = Staged(folder, force=force, folder=True)
+    staged = Staged(folder, force=force, folder=True, ours=lambda p: (p / CLIP_RECORD).is_file())
     tmp = staged.open()
     try:
         sinks = [SINKS[name](tmp / output_name(name)) for name in job.outputs]

@@ -24,7 +24,7 @@ import numpy as np
 from visemeface import __version__
 from visemeface.errors import InputError
 from visemeface.export.sinks import Sink, register
-from visemeface.outputs import Staged, atomic_dir, check_new
+from visemeface.outputs import Staged, atomic_dir, check_new, output_path
 
 #: Digits of the zero-padded frame number in sequence file names.
 FRAME_DIGITS = 6
@@ -120,7 +120,7 @@ class FramesSink(Sink):
     needs_image = True
 
     def __init__(self, path, force: bool = False, resume: bool = False, **settings):
-        self.path = Path(path)
+        self.path = output_path(path)
         self.partial = self.path.with_name(self.path.name + ".partial")
         self.force, self.resume, self.settings = force, resume, settings
         self.kept = 0

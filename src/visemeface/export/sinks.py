@@ -28,7 +28,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from visemeface.errors import InputError
-from visemeface.outputs import Staged, check_suffix
+from visemeface.outputs import Staged, check_suffix, output_path
 
 #: name -> Sink subclass, in registration order (the order of the CLI options).
 SINKS: dict[str, type[Sink]] = {}
@@ -98,7 +98,7 @@ class Sink:
     arguments: ClassVar[tuple] = ()
 
     def __init__(self, path, force: bool = False, **settings):
-        self.path = Path(path)
+        self.path = output_path(path)
         if self.suffixes:
             check_suffix(self.path, *self.suffixes)
         self.force = force
