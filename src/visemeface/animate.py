@@ -21,27 +21,34 @@ MAX_UTTERANCE_S = 3 * 3600
 
 
 def parse_emotions(specs, known: Iterable[str]) -> dict[str, float]:
-    """``["happiness=0.6", "anger"]`` -> ``{"happiness": 0.6, "anger": 1.0}``, names checked."""
+    """``["happiness=0.6", "anger"]`` -> ``{"happiness": 0.6, "anger": 1.0}``, names checked and every
+    weight in 0..1 (as a text's emotion tags): the one reader of ``--emotion`` for every command."""
     from visemeface.postures.library import parse_weights
 
     emotions = parse_weights(specs)
     known = list(known)
-    for name in emotions:
+    for name, weight in emotions.items():
         if name not in known:
             raise InputError(f"unknown emotion {name!r}{close_matches(name, known)}")
+        if not 0.0 <= weight <= 1.0:
+            raise InputError(f"emotion weight {weight:g} for {name!r} is not in 0..1")
     return emotions
 
 
-def _warn_audio_length(audio, track, fps) -> None:
+def _to_the_audio(audio, utterance, fps):
+    """The utterance made to last as long as ``audio`` (the face at rest after its last phone, so the
+    recording is never cut), with a warning where they differ by more than a frame."""
     import warnings
 
     from visemeface.pipeline import check_audio
 
-    audio_s, video_s = check_audio(audio), len(track) / fps
-    if abs(audio_s - video_s) > 1.0 / fps:
-        what = "padded with silence" if audio_s < video_s else "cut"
-        warnings.warn(f"{audio}: the audio lasts {audio_s:.2f} s, the animation {video_s:.2f} s; "
-                      f"the audio is {what} to the animation", stacklevel=4)
+    audio_s, speech_s = check_audio(audio), utterance.end
+    if abs(audio_s - speech_s) > 1.0 / fps:
+        what = ("the audio is padded with silence to the animation" if audio_s < speech_s else
+                "the face rests after the last phone until the audio ends")
+        warnings.warn(f"{audio}: the audio lasts {audio_s:.2f} s, the transcript {speech_s:.2f} s; {what}",
+                      stacklevel=4)
+    return utterance.lasting(audio_s)
 
 
 def simulated_motion(rig, track, physics: str, settings=None):
@@ -74,7 +81,8 @@ def animate(utterance, sinks: list, render=None, *, rig=None, emotions=None, int
         Interpolation between visemes (default: coarticulation).
     fps : float
     audio : Path, optional
-        Sound muxed into a video sink (a length mismatch is warned about).
+        Sound muxed into a video sink: the animation lasts at least as long (the face at rest after
+        the last phone); a length mismatch is warned about.
     physics : str, optional
         ``"sticky"`` or ``"elastic"`` for the FEM face; None for the kinematic rig.
     physics_settings : PhysicsSettings, optional
@@ -96,6 +104,8 @@ def animate(utterance, sinks: list, render=None, *, rig=None, emotions=None, int
     if utterance.end > MAX_UTTERANCE_S:
         raise InputError(f"the transcript lasts {utterance.end:.0f} s, over the {MAX_UTTERANCE_S} s limit of one "
                          "run (wrong time units? try --format / --sample-rate)")
+    if audio is not None and any(s.name == "video" for s in sinks):
+        utterance = _to_the_audio(audio, utterance, fps)
     rig = rig if rig is not None else default_rig()
     if not isinstance(emotions, dict):
         emotions = parse_emotions(emotions, load_expressions(rig=rig).index)
@@ -106,8 +116,6 @@ def animate(utterance, sinks: list, render=None, *, rig=None, emotions=None, int
         from visemeface.speech.blinks import blink_utterance
 
         track = blink_utterance(track, rig, utterance)
-    if audio is not None and any(s.name == "video" for s in sinks):
-        _warn_audio_length(audio, track, fps)
     if physics is None or physics == "none":
         motion = KinematicMotion(rig, track)
     else:

@@ -72,7 +72,10 @@ def _show_warning(message, category, filename, lineno, file=None, line=None):
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     try:
-        args = parser.parse_args(argv)
+        args, extra = parser.parse_known_args(argv)
+        if extra:                         # named by the command they were given to, which lists its options
+            commands = next(a.choices for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+            commands.get(getattr(args, "command", None), parser).error(f"unrecognized arguments: {' '.join(extra)}")
     except UsageError as exc:
         print(f"visemeface: error: {exc}", file=sys.stderr)
         return 2

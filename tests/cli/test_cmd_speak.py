@@ -305,13 +305,19 @@ def test_speak_exports_only_needs_no_renderer(short, capsys, monkeypatch):
     assert export.read_pc2(short / "a.pc2")[1]["num_samples"] == N_SHORT
 
 
-def test_speak_warns_when_audio_length_differs(short, capsys):
+def test_a_recording_longer_than_its_transcript_is_never_cut(short, capsys):
     sf.write(short / "long.wav", np.zeros(32000, np.float32), 16000)  # 2 s for 0.8 s of speech
-    assert main(["speak", "short.txt", "--size", "32", "--audio", "long.wav", "-q"]) == 0
+    assert main(["speak", "short.txt", "--size", "32", "--audio", "long.wav", "--track", "t.csv", "-q"]) == 0
     err = capsys.readouterr().err
-    assert "warning: long.wav: the audio lasts 2.00 s, the animation 0.80 s; the audio is cut" in err
+    assert ("warning: long.wav: the audio lasts 2.00 s, the transcript 0.80 s; the face rests after the last "
+            "phone until the audio ends") in err
     info = export.read_video_info(short / "short.mp4")
-    assert info["audio_samples"] / info["audio_rate"] == pytest.approx(0.8, abs=2e-3)
+    assert info["audio_samples"] / info["audio_rate"] == pytest.approx(2.0, abs=2e-3)
+    assert info["n_frames"] == pytest.approx(2.0 * 30, abs=1)
+    from visemeface.speech.timeline import load_track
+
+    track = load_track(short / "t.csv")                    # at rest after the speech: the jaw shut
+    assert track["jaw"].iloc[-1] == pytest.approx(0.0, abs=1e-6) and track["jaw"].max() > 0.05
 
 
 @pytest.mark.slow
@@ -464,3 +470,18 @@ def test_say_blinks_by_default_and_not_with_no_blink(short):
     # deterministic: the same command blinks the same
     assert main(["say", text, "--no-video", "--track", "c.csv", "-q"]) == 0
     assert (short / "b.csv").read_bytes() == (short / "c.csv").read_bytes()
+
+
+@pytest.mark.parametrize("argv", [["pose", "ah", "--emotion", "happiness=5", "-o", "p.png"],
+                                  ["speak", "short.txt", "--emotion", "happiness=1.5", "-o", "s.mp4"],
+                                  ["sheet", "--emotion", "anger=2", "-o", "s.png"]])
+def test_every_command_takes_emotion_weights_in_0_to_1_as_text_tags_do(short, capsys, argv):
+    assert main(argv) == 2
+    assert "is not in 0..1" in capsys.readouterr().err
+    assert sorted(p.name for p in short.iterdir()) == ["short.txt", "short.wav"]
+
+
+def test_pose_takes_a_bare_emotion_name_as_speak_does(short, capsys):
+    assert main(["pose", "ah", "--emotion", "happiness", "--size", "64", "-o", "p.png"]) == 0
+    assert main(["pose", "ah", "--emotion", "hapiness", "--size", "64", "-o", "q.png"]) == 2
+    assert "did you mean: happiness" in capsys.readouterr().err

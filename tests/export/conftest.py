@@ -7,7 +7,7 @@ import pytest
 from visemeface.cli import main
 from visemeface.resources import transcripts_path
 
-TEXT = "one five zero zero six"
+TEXT = "set white with p two soon"
 OUTPUTS = {"--gltf": "a.glb", "--arkit": "a.json", "--livelink": "ll.csv", "--vrm": "v.csv", "--oculus": "o.csv",
            "--rhubarb": "r.json", "--obj": "objd", "--pc2": "a.pc2", "--preview": "p.html", "--track": "t.csv"}
 
@@ -16,7 +16,7 @@ OUTPUTS = {"--gltf": "a.glb", "--arkit": "a.json", "--livelink": "ll.csv", "--vr
 def exported(tmp_path_factory):
     root = tmp_path_factory.mktemp("exports")
     (root / "t.txt").write_text(TEXT + "\n")
-    shutil.copy(transcripts_path("set_white_with_p_two_soon.wav"), root / "a.wav")   # real speech: the text is timed to it
+    shutil.copy(transcripts_path("set_white_with_p_two_soon.wav"), root / "a.wav")   # its words: aligned to it
     args = ["speak", str(root / "t.txt"), "--no-video", "-q", "--audio", str(root / "a.wav")]
     for option, name in OUTPUTS.items():
         args += [option, str(root / name)]

@@ -93,7 +93,7 @@ def test_live_link_csv_has_its_exact_header_and_a_row_a_frame(exported):
     for r in rows[1:]:
         assert r[1] == "61" and all(0.0 <= float(x) <= 1.0 for x in r[2:54]) and set(r[54:]) == {"0"}
     jaw = [float(r[head.index("JawOpen")]) for r in rows[1:]]
-    assert max(jaw) > 0.3                                                # "five" opens the jaw
+    assert max(jaw) > 0.3                                                # "white" opens the jaw
 
 
 def test_weight_files_parse_back(exported):

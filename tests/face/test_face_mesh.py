@@ -95,6 +95,18 @@ def test_save_refuses_overwrite_without_force(tmp_path, small_face):
     assert np.allclose(load_face(path).vertices, moved.vertices, atol=1e-7)
 
 
+def test_one_face_saves_in_two_formats_beside_one_landmarks_file(tmp_path, small_face):
+    small_face.save(tmp_path / "head.obj")
+    side = (tmp_path / "head.landmarks.json").read_bytes()
+    small_face.save(tmp_path / "head.glb")                     # the same landmarks: no clash
+    assert (tmp_path / "head.landmarks.json").read_bytes() == side
+    other = FaceMesh(small_face.vertices, small_face.quads, small_face.tris, small_face.regions,
+                     {k: v for k, v in list(small_face.landmarks.items())[1:]}, small_face.colors)
+    with pytest.raises(InputError, match="exists"):           # other landmarks: --force or another name
+        other.save(tmp_path / "head.ply")
+    assert not (tmp_path / "head.ply").exists()
+
+
 def test_save_unknown_format(tmp_path, small_face):
     with pytest.raises(InputError, match="unknown mesh format"):
         small_face.save(tmp_path / "face.stl")

@@ -532,6 +532,14 @@ def test_a_lab_file_read_as_timit_samples_is_refused_not_stretched_to_minutes():
         read_transcript(transcripts_path("bob_moves_five_boats.lab"), fmt="phn")
 
 
+def test_a_lab_file_in_seconds_is_refused_not_squeezed_into_one_frame(tmp_path):
+    # HTK .lab counts 100 ns units: seconds read as those make every phone 10^7 times too short
+    seconds = "".join(line + "\n" for line in transcripts_path("bob_moves_five_boats.txt").read_text().splitlines()
+                      if line and not line.startswith("#"))
+    with pytest.raises(InputError, match=r"secs.lab:\d+: the median phone lasts .*e-0\d s.*wrong time units"):
+        read_transcript(write(tmp_path, "secs.lab", seconds))
+
+
 def test_textgrid_with_an_absurd_interval_count_is_a_one_line_error(tmp_path):
     # Short format; praatio reads it (it ignores the count), the line finder must not overflow.
     text = ('File type = "ooTextFile"\nObject class = "TextGrid"\n\n0\n1\n<exists>\n1\n"IntervalTier"\n'

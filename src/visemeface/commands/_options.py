@@ -119,8 +119,10 @@ def add_physics_arguments(p: argparse.ArgumentParser, default: str, choices: tup
     g.add_argument("--evaporation", type=float, metavar="E", help="moisture lost per second (default 0)")
     g.add_argument("--rupture-time", type=float, metavar="S", help="saliva strands thin over S seconds before they "
                    "snap (default 0.03: the lips unzip from the centre; 0: the seed's brittle film)")
-    g.add_argument("--seam-elements", type=int, metavar="N", help="refine the lips to N tissue elements along the "
-                   "seam (default 48, one per saliva slab; 0: the face's own, the seed's mesh)")
+    g.add_argument("--seam-elements", type=int, metavar="N", help="refine the lips to at least N tissue elements "
+                   "along the seam: each seam edge split into equal parts, so the next multiple of the face's "
+                   "own count (12 on the default face; default 48, one per saliva slab; 0: the face's own, the "
+                   "seed's mesh)")
     g.add_argument("--film-corners", action=argparse.BooleanOptionalAction, default=None,
                    help="carry the saliva film into the mouth corners, where the lips meet (default: on; "
                    "--no-film-corners ends it at the last pair of lip vertices, the seed's film, whose unglued "
@@ -261,7 +263,9 @@ def text_of(recording: Path, text, text_file, quiet: bool = False):
 
 def recording_utterance(recording: Path, text, text_file, quiet: bool = False):
     """Utterance of a recording: aligned to its words if any, else recognised."""
+    from visemeface.pipeline import check_audio
     from visemeface.speech.align import utterance_from_audio
 
+    check_audio(recording)                     # an unreadable recording is the only line, before any note
     words, path = text_of(recording, text, text_file, quiet)
     return utterance_from_audio(recording, words, text_where=path)

@@ -10,7 +10,7 @@ ORDER = 21
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "muscles",
-        help="list the rig's 25 muscles and the jaw (kind, side, range, lip side)",
+        help="list the rig's functions: 25 face muscles, tongue, lip-shaping and lid functions, the jaw",
         description="List the functions of the Waters muscle rig: name (use it with "
         "`visemeface pose --set NAME=VALUE`), kind (linear, sphincter, rotation), side, activation "
         "range (values outside are clamped) and lip side (upper-lip muscles move nothing below the "

@@ -26,8 +26,8 @@ def register(subparsers) -> None:
                    help="viseme to start from (DECtalk symbol, e.g. aa, uw, m); default: rest")
     p.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE",
                    help="set one muscle's activation (repeatable; after the posture and emotions)")
-    p.add_argument("--emotion", dest="emotions", action="append", default=[], metavar="NAME=W",
-                   help="blend an emotion with weight W (repeatable), e.g. happiness=0.6")
+    p.add_argument("--emotion", dest="emotions", action="append", default=[], metavar="NAME[=W]",
+                   help="blend an emotion with weight W in 0..1 (default 1; repeatable), e.g. happiness=0.6")
     from visemeface.render import VIEWS
 
     p.add_argument("--view", default="face", choices=VIEWS, help="camera (default face)")
@@ -92,10 +92,12 @@ def run(args) -> int:
 
     size = parse_size(args.size)
     sets = parse_assignments(args.sets, "--set")
-    emotions = parse_assignments(args.emotions, "--emotion")
+    from visemeface.animate import parse_emotions
     from visemeface.commands._options import build_rig
+    from visemeface.postures.library import load_expressions
 
     rig = build_rig(args)
+    emotions = parse_emotions(args.emotions or None, load_expressions(rig=rig).index)
     a = activations(rig, args.posture, emotions, sets)
     vertices = rig.pose(a)
     with Renderer(rig.face, size=size, view=args.view) as renderer:

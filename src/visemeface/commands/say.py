@@ -14,7 +14,7 @@ examples:
   visemeface say "one five zero zero six"                        # -> say.mp4
   visemeface say "Hello there." --emotion happiness=0.6 -o hello.mp4
   visemeface say "[anger 0.8] Bob moves five boats. [happiness] One five zero zero six!" -o tags.mp4
-  visemeface say "Hello there." --audio hello.wav -o hello.mp4   # timing stretched to the audio
+  visemeface say "Hello there." --audio hello.wav -o hello.mp4   # the words aligned to the recording
   visemeface say "Hello there." --silent -o quiet.mp4           # no synthesised voice
 
 With the optional extra installed (pip install "visemeface[tts]": eSpeak NG, GPL-3.0) the text is
@@ -28,8 +28,8 @@ def register(subparsers) -> None:
         "say",
         help="animate English text (words -> phonemes -> video)",
         description="Turn English text into phonemes (CMU dictionary, numbers spelled out, a letter-to-sound "
-        "fallback for unknown words), time them (--rate, or stretched to --audio) and animate the face. "
-        "Takes every option of `visemeface speak` after the transcript.",
+        "fallback for unknown words), time them (--rate, or aligned to a recording of them, --audio) and "
+        "animate the face. Takes every option of `visemeface speak` after the transcript.",
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("text", metavar="TEXT", help="what to say (quote it)")
     p.add_argument("--rate", type=float, metavar="WPM", default=None,
@@ -47,18 +47,19 @@ def run(args) -> int:
     from visemeface.errors import InputError
     from visemeface.speech import tts
     from visemeface.speech.g2p import text_to_utterance
+    from visemeface.speech.transcripts import timed_text
 
     if not args.text.strip():
         raise InputError("nothing to say: the text is empty")
     if args.rate is not None and args.audio is not None:
         raise InputError("--rate and --audio both time the text; give one")
-    sinks, render, physics = check_early(args, Path.cwd() / "say.mp4")
+    sinks, render, physics, saved = check_early(args, Path.cwd() / "say.mp4")
     speak_aloud = args.audio is None and not args.silent
     if not speak_aloud or not tts.available():
-        utterance = text_to_utterance(args.text, rate_wpm=args.rate, audio=args.audio)
-        status = animate_utterance(utterance, args, sinks, render, physics)
-        if speak_aloud and not args.quiet:      # after the run: a bad input's error stays the only line
-            print(f"visemeface: note: {tts.HINT}", file=sys.stderr)
+        utterance = timed_text(args.text, args.rate, args.audio)
+        status = animate_utterance(utterance, args, sinks, render, physics, saved=saved)
+        if speak_aloud and not args.quiet and any(s.name == "video" for s in sinks):
+            print(f"visemeface: note: {tts.HINT}", file=sys.stderr)   # after the run: an error stays the only line
         return status
     from visemeface.speech.align import utterance_from_audio
 
@@ -66,4 +67,4 @@ def run(args) -> int:
     with tempfile.TemporaryDirectory(prefix="visemeface-") as folder:
         wav = tts.synthesise(args.text, Path(folder) / "say.wav", rate_wpm=args.rate)
         utterance = utterance_from_audio(wav, args.text, where="synthesised speech", check_text=False)
-        return animate_utterance(utterance, args, sinks, render, physics, audio=wav)
+        return animate_utterance(utterance, args, sinks, render, physics, audio=wav, saved=saved)

@@ -76,10 +76,11 @@ def compose_sheet(images: list[np.ndarray], labels: list[str], columns: int,
 def run(args) -> int:
     from PIL import Image
 
+    from visemeface.animate import parse_emotions
     from visemeface.errors import InputError
     from visemeface.muscles.rig import default_rig
     from visemeface.outputs import atomic_output, check_new, check_suffix, progress
-    from visemeface.postures.library import load_expressions, load_visemes, parse_weights, posed_vertices
+    from visemeface.postures.library import load_expressions, load_visemes, posed_vertices
     from visemeface.render.renderer import Renderer
 
     if args.size < 16 or args.size % 16:
@@ -90,7 +91,7 @@ def run(args) -> int:
         raise InputError("give either --emotions (a sheet of the emotions) or --emotion NAME=W (blend), not both")
     check_new(check_suffix(args.output, ".png"), args.force)
     rig = default_rig()
-    mix = parse_weights(args.emotion)
+    mix = parse_emotions(args.emotion, load_expressions(rig=rig).index)
     if args.emotions:
         names = ["_"] + load_expressions(rig=rig).index.tolist()
         poses = [("_", {})] + [("_", {e: 1.0}) for e in names[1:]]

@@ -49,7 +49,10 @@ def add_animation_arguments(p: argparse.ArgumentParser, video_default: str) -> N
     anim.add_argument("--no-blink", action="store_true",
                       help="do not blink (default: about 17 blinks a minute, at word boundaries, the same every run)")
     anim.add_argument("--audio", type=Path, metavar="WAV",
-                      help="sound to mux into the MP4 (starts at t=0; padded or cut to the animation)")
+                      help="a recording to mux into the MP4 (starts at t=0): plain text is aligned to it; the "
+                      "face rests after the last phone until it ends")
+    anim.add_argument("--save-transcript", type=Path, metavar="OUT",
+                      help="also write the timed phones (read, aligned or recognised): .txt, .lab, .TextGrid or .json")
     opt.add_face_arguments(p)
     opt.add_physics_arguments(p, "none", ("none",) + tuple(PHYSICS))
     opt.add_render_arguments(p)
@@ -57,11 +60,13 @@ def add_animation_arguments(p: argparse.ArgumentParser, video_default: str) -> N
                              "rendered into --frames DIR, continue a --physics simulation from its checkpoint")
 
 
-def check_early(args, default_video: Path):
+def check_early(args, default_video: Path, inputs=()):
     """Everything that needs no transcript or rig: outputs, render settings, fps, audio, physics.
 
-    Returns (sinks, render settings, physics settings or None).
+    Returns (sinks, render settings, physics settings or None, the staged ``--save-transcript`` or None);
+    refuses an output that is one of ``inputs`` (paths) or another output.
     """
+    from visemeface.errors import InputError
     from visemeface.pipeline import check_audio
 
     sinks = opt.sinks_from_args(args, default_video)
@@ -69,24 +74,46 @@ def check_early(args, default_video: Path):
     opt.check_fps_option(args.fps)
     if args.audio is not None:
         check_audio(args.audio)
-    return sinks, render, opt.physics_from_args(args)
+    saved = _transcript_target(args)
+    inputs = {Path(p).resolve() for p in inputs} | ({args.audio.resolve()} if args.audio is not None else set())
+    targets = [t for s in sinks for t in s.targets()]
+    for target in targets + ([saved.path] if saved is not None else []):
+        if Path(target).resolve() in inputs:
+            raise InputError("the output would overwrite an input; name another with -o", target)
+    if saved is not None and Path(saved.path).resolve() in {Path(t).resolve() for t in targets}:
+        raise InputError("--save-transcript and another output are the same path", saved.path)
+    return sinks, render, opt.physics_from_args(args), saved
 
 
-def animate_utterance(utterance, args, sinks, render, physics, audio=None) -> int:
+def animate_utterance(utterance, args, sinks, render, physics, audio=None, saved=None) -> int:
     """Utterance -> the sinks through :func:`visemeface.animate.animate`; prints a summary.
 
-    ``audio`` (default ``--audio``) is the sound muxed into the video.
+    ``audio`` (default ``--audio``) is the sound muxed into the video; ``saved`` the staged
+    ``--save-transcript`` (:func:`check_early`), written with the other outputs or not at all.
     """
     from visemeface import pipeline
     from visemeface.animate import animate
+    from visemeface.speech.writers import format_of, write_transcript
 
-    stats = animate(utterance, sinks, render, rig=opt.build_rig(args), emotions=args.emotion, interp=args.interp,
-                    fps=args.fps, audio=args.audio if audio is None else audio, physics=args.physics,
-                    physics_settings=physics, checkpoint=lambda motion: opt.checkpoint_of(motion, sinks, args),
-                    resume=args.resume, show_progress=not args.quiet,
-                    source=str(getattr(args, "transcript", None) or "text"), blink=not args.no_blink)
+    try:
+        if saved is not None:
+            write_transcript(utterance, saved.open(), fmt=format_of(saved.path), force=True)
+        stats = animate(utterance, sinks, render, rig=opt.build_rig(args), emotions=args.emotion,
+                        interp=args.interp, fps=args.fps, audio=args.audio if audio is None else audio,
+                        physics=args.physics, physics_settings=physics,
+                        checkpoint=lambda motion: opt.checkpoint_of(motion, sinks, args), resume=args.resume,
+                        show_progress=not args.quiet, source=str(getattr(args, "transcript", None) or "text"),
+                        blink=not args.no_blink)
+    except BaseException:
+        if saved is not None:
+            saved.abort()
+        raise
+    if saved is not None:
+        saved.commit()
     if not args.quiet:
         print(pipeline.summary(stats, args.fps))
+        if saved is not None:
+            print(f"timed phones -> {saved.path}")
     return 0
 
 
@@ -116,8 +143,6 @@ def register(subparsers) -> None:
                      "(with --audio the text is timed to the recording instead)")
 
     opt.add_text_arguments(src)
-    src.add_argument("--save-transcript", type=Path, metavar="OUT",
-                     help="also write the timed phones read or found: .txt, .lab, .TextGrid or .json")
     add_animation_arguments(p, "TRANSCRIPT's stem + .mp4")
     p.set_defaults(func=run)
 
@@ -162,29 +187,9 @@ def run(args) -> int:
 
     if not args.transcript.is_file():
         raise InputError("transcript not found", args.transcript)
-    sinks, render, physics = check_early(args, Path.cwd() / (args.transcript.stem + ".mp4"))
-    saved = _transcript_target(args)
-    inputs = {args.transcript.resolve()} | ({args.audio.resolve()} if args.audio is not None else set())
-    for target in [t for s in sinks for t in s.targets()] + ([saved.path] if saved is not None else []):
-        if Path(target).resolve() in inputs:
-            raise InputError("the output would overwrite an input; name another with -o", target)
-    if saved is not None and Path(saved.path).resolve() in {Path(t).resolve() for s in sinks for t in s.targets()}:
-        raise InputError("--save-transcript and another output are the same path", saved.path)
+    sinks, render, physics, saved = check_early(args, Path.cwd() / (args.transcript.stem + ".mp4"),
+                                                inputs=[args.transcript])
     utterance, recording = _read_input(args)
     with tempfile.TemporaryDirectory(prefix="visemeface-") as folder:
         sound = None if recording is None else media_wav(recording, folder)
-        try:
-            if saved is not None:
-                from visemeface.speech.writers import format_of, write_transcript
-
-                write_transcript(utterance, saved.open(), fmt=format_of(saved.path), force=True)
-            code = animate_utterance(utterance, args, sinks, render, physics, audio=sound)
-        except BaseException:
-            if saved is not None:
-                saved.abort()
-            raise
-    if saved is not None:
-        saved.commit()
-        if not args.quiet:
-            print(f"timed phones -> {saved.path}")
-    return code
+        return animate_utterance(utterance, args, sinks, render, physics, audio=sound, saved=saved)

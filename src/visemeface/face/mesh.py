@@ -264,10 +264,15 @@ class FaceMesh:
                              path)
         side = sidecar_path(path)
         tm = self.to_trimesh()
+        text = json.dumps(self.sidecar(), separators=(",", ":"))
+        # The same landmarks already beside it (this face saved in another format, head.obj then head.glb):
+        # kept, not a clash.
+        same = side.is_file() and side.read_text(errors="replace") == text
         # Check both targets before writing either, so a refusal leaves no half pair.
         from visemeface.outputs import check_new
         check_new(path, force)
-        check_new(side, force)
+        if not same:
+            check_new(side, force)
         with atomic_output(path, force) as tmp:
             if suffix == ".obj":
                 data = tm.export(file_type="obj", include_color=True, include_normals=False,
@@ -280,8 +285,9 @@ class FaceMesh:
                 tmp.write_bytes(data[name])
             else:
                 tmp.write_bytes(tm.export(file_type=suffix[1:]))
-        with atomic_output(side, force) as tmp:
-            tmp.write_text(json.dumps(self.sidecar(), separators=(",", ":")))
+        if not same:
+            with atomic_output(side, force) as tmp:
+                tmp.write_text(text)
         return path, side
 
 

@@ -53,3 +53,19 @@ class Utterance:
     def end(self) -> float:
         """End of the last segment (s): the utterance's length."""
         return float(self.segments["end"].iloc[-1]) if len(self.segments) else 0.0
+
+    def lasting(self, seconds: float) -> Utterance:
+        """This utterance, silent from its end to ``seconds`` (itself if it lasts that long already)."""
+        from dataclasses import replace
+
+        from visemeface.postures.phonemes import SILENCE
+
+        if seconds <= self.end:
+            return self
+        seg = self.segments.copy()
+        if len(seg) and seg["phoneme"].iloc[-1] == SILENCE:
+            seg.loc[seg.index[-1], "end"] = float(seconds)
+        else:
+            row = pd.DataFrame({"start": [self.end], "end": [float(seconds)], "phoneme": [SILENCE]})
+            seg = pd.concat([seg, row], ignore_index=True)
+        return replace(self, segments=seg)

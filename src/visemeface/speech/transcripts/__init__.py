@@ -62,6 +62,9 @@ TIERED = ("textgrid", "mfa-json", "mfa-csv")
 #: speech phones last 0.03-0.3 s and even a sung vowel rarely 5 s, while TIMIT samples read as
 #: HTK units (or the reverse) are off by a factor of 625.
 MAX_MEDIAN_PHONE = 5.0
+#: ... or shorter than this (s): seconds read as HTK's 100 ns units come out 10⁷ times too short, and
+#: even very fast speech keeps its median phone above 20 ms.
+MIN_MEDIAN_PHONE = 0.005
 
 
 def read_utterance(path, fmt: str | None = None, tier: str | None = None, sample_rate: float = 16000,
@@ -82,8 +85,8 @@ def read_utterance(path, fmt: str | None = None, tier: str | None = None, sample
         Phone alphabet of the labels (``dectalk``, ``arpabet``, ``timit``,
         ``ipa``/``mfa``); default: detected.
     rate_wpm, audio
-        For plain text only: speaking rate and audio to align to (see g2p);
-        ``rate_wpm`` given for a timed format is an error.
+        For plain text only: speaking rate, or a recording of the text to align it to
+        (:func:`timed_text`); ``rate_wpm`` given for a timed format is an error.
 
     Raises
     ------
@@ -109,6 +112,17 @@ def read_transcript(path, fmt: str | None = None, tier: str | None = None, sampl
     return read_utterance(path, fmt, tier, sample_rate, alphabet, rate_wpm, audio).segments
 
 
+def timed_text(text: str, rate_wpm: float | None = None, audio=None, where=None) -> Utterance:
+    """English text timed: by forced alignment to ``audio``, a recording of it
+    (:func:`visemeface.speech.align.utterance_from_audio`; ``rate_wpm`` is then ignored), else by the
+    text-to-phoneme rules at ``rate_wpm`` (:func:`visemeface.speech.g2p.text_to_utterance`)."""
+    if audio is not None:
+        from visemeface.speech.align import utterance_from_audio
+        return utterance_from_audio(audio, text, text_where=where)
+    from visemeface.speech.g2p import text_to_utterance
+    return text_to_utterance(text, rate_wpm=rate_wpm, path=where)
+
+
 def parse_utterance(text: str, fmt: str | None = None, tier: str | None = None, sample_rate: float = 16000,
                     alphabet: str | None = None, path=None, rate_wpm: float | None = None,
                     audio=None) -> Utterance:
@@ -119,8 +133,7 @@ def parse_utterance(text: str, fmt: str | None = None, tier: str | None = None, 
     if tier is not None and fmt not in TIERED:
         raise InputError(f"--tier applies to {', '.join(TIERED)} transcripts, not to the {fmt} format", where)
     if fmt == "text":
-        from visemeface.speech.g2p import text_to_utterance
-        return text_to_utterance(text, rate_wpm=rate_wpm, audio=audio, path=where)
+        return timed_text(text, rate_wpm, audio, where)
     if rate_wpm is not None:
         raise InputError(f"--rate applies to plain text only; this transcript is timed ({fmt} format)", where)
 
@@ -143,7 +156,7 @@ def parse_transcript(text: str, fmt: str | None = None, tier: str | None = None,
 
 
 def _check_plausible(seg: Segments, rows: list[Row], fmt: str, where) -> None:
-    """Refuse phones lasting many seconds: wrong time units, sample rate or format.
+    """Refuse phones lasting many seconds or a few microseconds: wrong time units, sample rate or format.
 
     ``rows`` are the rows read (their ends filled by :func:`make_segments`): the
     error names the line of the first phone as long as the median.
@@ -152,8 +165,10 @@ def _check_plausible(seg: Segments, rows: list[Row], fmt: str, where) -> None:
     if not len(speech):
         return
     median = float((speech["end"] - speech["start"]).median())
-    if median > MAX_MEDIAN_PHONE:
-        line = next((r.line for r in rows if r.end is not None and r.end - r.start >= median - 1e-9), None)
+    if median > MAX_MEDIAN_PHONE or median < MIN_MEDIAN_PHONE:
+        sign = 1.0 if median > MAX_MEDIAN_PHONE else -1.0     # the first phone as long (as short) as the median
+        line = next((r.line for r in rows if r.end is not None and sign * (r.end - r.start - median) >= -1e-9 * median),
+                    None)
         raise InputError(f"the median phone lasts {median:.3g} s (speech: 0.03-0.3 s): wrong time units "
                          f"for the {fmt} format? (try --format, or --sample-rate for TIMIT .PHN)", where, line)
 
