@@ -66,9 +66,12 @@ def read_align(path: Path) -> list[tuple[float, float, str]]:
 
 
 def aligned_utterance(utt, words: list[tuple[float, float, str]], duration: float):
-    """Map the utterance's times piecewise linearly so that its words fall on the alignment's."""
+    """Map the utterance's times piecewise linearly so that its words fall on the alignment's: with one
+    "word" spanning the whole text (``len(words) == 1``), its speech is stretched onto that span."""
     w = utt.words
-    if len(w) != len(words):
+    if len(words) == 1:
+        w = {"start": [w["start"].iloc[0]], "end": [w["end"].iloc[-1]]}
+    elif len(w) != len(words):
         raise ValueError(f"{len(w)} words in the text, {len(words)} in the alignment")
     src = [0.0] + [t for s, e in zip(w["start"], w["end"]) for t in (s, e)] + [utt.end]
     dst = [0.0] + [t for s, e, _ in words for t in (s, e)] + [duration]
@@ -152,10 +155,13 @@ def timed_segments(video: Path, text: str, timing: str, duration: float):
     align = video.with_suffix(".align")
     if align.exists():
         return aligned_utterance(text_to_utterance(text, warn=False), read_align(align), duration), "GRID .align"
+    from visemeface.speech.audio import read_audio, speech_span
+
     with tempfile.TemporaryDirectory() as tmp:
         wav = Path(tmp) / "a.wav"
         extract_audio(video, wav)
-        return text_to_utterance(text, audio=wav, warn=False).segments, "audio span"
+        t0, t1 = speech_span(*read_audio(wav))
+    return aligned_utterance(text_to_utterance(text, warn=False), [(t0, t1, text)], duration), "audio span"
 
 
 def phone_heights(real, synth, segments, span_s) -> list[tuple[str, float, float]]:
