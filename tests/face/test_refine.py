@@ -59,3 +59,22 @@ def test_refinement_is_conforming_and_keeps_the_surface(face, fine):
 def test_refinement_refuses_bad_input(face):
     with pytest.raises(InputError, match="seam elements"):
         refine_lip_seam(face, 0)
+
+
+def test_the_refined_face_is_shaded_as_the_face_it_refines(face, fine):
+    """Its thin strips shaded by their own normals show the creases between the unrefined bilinear quads
+    as streaks a strip wide; shaded by the interpolated normals of the face it refines, it renders as that
+    face does."""
+    from dataclasses import replace
+
+    from visemeface.render.renderer import Renderer
+
+    N = face.n_vertices
+    assert np.allclose(fine.vertex_normals()[:N], face.vertex_normals(), atol=1e-12)
+    own = replace(fine, shading_parent=None)
+    images = []
+    for f in (face, fine, own):
+        with Renderer(f, size=(256, 256), view="mouth") as r:
+            images.append(r.render(f.vertices).astype(float))
+    shaded, streaked = (np.abs(images[0] - im).mean() for im in images[1:])
+    assert shaded < 1.0 and streaked > 3 * shaded        # measured: 0.70 against 2.57 grey levels

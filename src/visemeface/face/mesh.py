@@ -116,10 +116,14 @@ class NormalAccumulator:
         f[:, 1] = e1[:, 2] * e2[:, 0] - e1[:, 0] * e2[:, 2]
         f[:, 2] = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
         s = self._incidence32 if v.dtype == np.float32 else self._incidence
-        n = s @ f
-        length = np.sqrt(np.einsum("ij,ij->i", n, n))
-        length[length == 0] = 1.0
-        return n / length[:, None]
+        return unit_rows(s @ f)
+
+
+def unit_rows(n: np.ndarray) -> np.ndarray:
+    """Each row of ``n`` scaled to unit length (zero rows kept)."""
+    length = np.sqrt(np.einsum("ij,ij->i", n, n))
+    length[length == 0] = 1.0
+    return n / length[:, None]
 
 
 def vertex_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
@@ -155,6 +159,10 @@ class FaceMesh:
     colors: np.ndarray | None = None
     #: Where the landmarks came from (a ``.landmarks.json``), named in errors; None for a built face.
     landmarks_file: str | None = None
+    #: A refined face (:func:`visemeface.face.refine.lip_refinement`) is shaded as the face it refines:
+    #: ``(P, parent)``, its normals those of its first N vertices on ``parent``'s triangles, interpolated by
+    #: the sparse (N', N) ``P`` that made its vertices (see :meth:`normal_accumulator`); None: its own.
+    shading_parent: tuple | None = field(default=None, repr=False, compare=False)
 
     def __post_init__(self):
         self.vertices = np.ascontiguousarray(self.vertices, dtype=np.float64).reshape(-1, 3)
@@ -201,10 +209,28 @@ class FaceMesh:
             g[self.regions["mouth_cavity"]] = 1
         return g
 
+    def normal_accumulator(self):
+        """The per-frame normals of this face's vertices (:class:`NormalAccumulator`, by smoothing group).
+
+        A refined face (:attr:`shading_parent`) takes its parent's normals interpolated as its vertices
+        were: at rest the same smooth shading as the unrefined face. Its own thin strips, shaded
+        directly, show the creases between the parent's bilinear quads (up to 10° on the default face)
+        as streaks one strip wide, which the parent's coarse interpolation hides.
+        """
+        if self.shading_parent is None:
+            return NormalAccumulator(self.triangles, self.n_vertices, self.shading_groups())
+        P, parent = self.shading_parent
+        coarse, n = parent.normal_accumulator(), parent.n_vertices
+
+        def normals(vertices, dtype=np.float64):
+            v = np.asarray(vertices)
+            return unit_rows(P @ coarse(v[:n], dtype=np.float64)).astype(dtype, copy=False)
+
+        return normals
+
     def vertex_normals(self, vertices: np.ndarray | None = None) -> np.ndarray:
         """Unit vertex normals of ``vertices`` (rest positions if None), by smoothing group."""
-        acc = NormalAccumulator(self.triangles, self.n_vertices, self.shading_groups())
-        return acc(self.vertices if vertices is None else vertices)
+        return self.normal_accumulator()(self.vertices if vertices is None else vertices)
 
     def vertex_colors(self) -> np.ndarray:
         """(N, 3) float32 display colours: skin, redder lips, dark mouth cavity, pale eyes.

@@ -160,7 +160,7 @@ def lip_refinement(face: FaceMesh, elements: int = SEAM_ELEMENTS):
     P = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, N))
     colors = None if face.colors is None else P @ face.colors
     fine = FaceMesh(P @ face.vertices, np.concatenate(quads), face.tris, _regions(face, P), dict(face.landmarks),
-                    colors, face.landmarks_file)
+                    colors, face.landmarks_file, shading_parent=(P, face))
     return fine, P, np.array(parent, dtype=np.int64)
 
 

@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from visemeface.errors import InputError, RenderUnavailable
-from visemeface.face.mesh import FaceMesh, NormalAccumulator
+from visemeface.face.mesh import FaceMesh
 
 from visemeface.render import PROJECTIONS, VIEWS  # noqa: E402  (re-exported)
 BACKGROUND = (0.045, 0.047, 0.06)
@@ -177,7 +177,7 @@ class Renderer:
         self.view = view
         self.projection = projection
         self._triangles = np.ascontiguousarray(face.triangles, dtype=np.int32)
-        self._normals = NormalAccumulator(face.triangles, face.n_vertices, face.shading_groups())
+        self._normals = face.normal_accumulator()
         self._setup_camera()
         self._setup_gl(samples)
 
