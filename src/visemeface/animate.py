@@ -25,11 +25,15 @@ def parse_emotions(specs, known: Iterable[str]) -> dict[str, float]:
     weight in 0..1 (as a text's emotion tags): the one reader of ``--emotion`` for every command."""
     from visemeface.postures.library import parse_weights
 
-    emotions = parse_weights(specs)
     known = list(known)
-    for name, weight in emotions.items():
+    emotions = {}
+    for name, weight in parse_weights(specs).items():
+        if name not in known and name.lower() in known:
+            name = name.lower()           # emotion names are lower case, as viseme symbols
         if name not in known:
             raise InputError(f"unknown emotion {name!r}{close_matches(name, known)}")
+        emotions[name] = emotions.get(name, 0.0) + weight
+    for name, weight in emotions.items():
         if not 0.0 <= weight <= 1.0:
             raise InputError(f"emotion weight {weight:g} for {name!r} is not in 0..1")
     return emotions

@@ -216,3 +216,17 @@ def test_without_a_client_a_local_cluster_is_started_and_closed(tmp_path):
     left = [p for p in psutil.Process().children(recursive=True) if p.pid not in before and p.is_running()
             and p.status() != psutil.STATUS_ZOMBIE and "resource_tracker" not in " ".join(p.cmdline())]
     assert not left, [p.cmdline() for p in left]
+
+
+def test_a_cluster_that_fails_is_named_in_the_report_not_called_an_interrupt(tmp_path):
+    class NoWorkers:                                    # as a local cluster whose nannies never start
+        def submit(self, *a, **k):
+            raise RuntimeError("Nanny failed to start.\nmore lines of the scheduler")
+
+        def cancel(self, futures):
+            pass
+
+    with pytest.raises(RuntimeError, match="Nanny"):
+        run(_jobs(tmp_path, 2), tmp_path / "out", client=NoWorkers(), show_progress=False)
+    errors = {r["error"] for r in read_report(tmp_path / "out" / REPORT)}
+    assert errors == {"not made: the batch stopped: RuntimeError: Nanny failed to start."}

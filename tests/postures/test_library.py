@@ -299,3 +299,26 @@ def test_viseme_names_are_case_insensitive_and_suggested():
     assert lib.blend("AA").equals(lib.blend("aa"))
     with pytest.raises(InputError, match=r"unknown viseme 'AX2' \(did you mean: ax"):
         lib.blend("AX2")
+
+
+def test_blend_reads_emotions_as_the_command_line_does_and_any_case():
+    a = lib.blend("ah", {"happiness": 0.6})
+    assert lib.blend("AH", "Happiness=0.6").equals(a) and lib.blend("ah", {"HAPPINESS": 0.6}).equals(a)
+
+
+def test_a_track_given_to_pose_says_which_call_takes_a_track():
+    from visemeface.muscles.rig import default_rig
+
+    rig = default_rig()
+    track = pd.DataFrame({"jaw": [0.1, 0.2]}, index=[0.0, 0.1])
+    with pytest.raises(InputError, match=r"use rig.poses\(track\)"):
+        rig.pose(track)
+    assert rig.poses(track).shape == (2, rig.face.n_vertices, 3)
+
+
+def test_activation_track_wants_the_viseme_table_not_its_values():
+    from visemeface.speech.timeline import activation_track
+
+    seg = pd.DataFrame({"start": [0.0], "end": [0.2], "phoneme": ["_"]})
+    with pytest.raises(InputError, match="visemes must be a DataFrame"):
+        activation_track(seg, lib.load_visemes().values)

@@ -167,6 +167,15 @@ def test_bad_arguments(face, front):
         Renderer(face, size=SIZE, projection="fisheye")
     with pytest.raises(InputError, match="shape"):
         front.render(face.vertices[:-1])
+    with pytest.raises(InputError, match="NaN"):
+        front.render(np.full_like(face.vertices, np.nan))
+
+
+def test_a_closed_renderer_says_so(face):
+    with Renderer(face, size=(32, 32)) as r:
+        r.render()
+    with pytest.raises(RuntimeError, match="closed"):
+        r.render()
 
 
 def test_save_png_round_trip(tmp_path, front):
@@ -179,3 +188,5 @@ def test_save_png_round_trip(tmp_path, front):
         save_png(path, img)
     save_png(path, np.zeros_like(img), force=True)
     assert cv2.imread(str(path)).max() == 0
+    with pytest.raises(InputError, match="must end in .png"):      # PNG bytes under another name: refused
+        save_png(tmp_path / "f.jpg", img)

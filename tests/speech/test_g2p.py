@@ -177,3 +177,11 @@ def test_property_any_text_gives_segments_or_input_error(text):
     s, e = seg.start.to_numpy(), seg.end.to_numpy()
     assert s[0] == 0 and (e > s).all() and np.allclose(s[1:], e[:-1], atol=0, rtol=0)
     assert set(seg.phoneme) <= set(DECTALK)
+
+
+def test_ampersand_titles_and_accented_words_are_read_as_said():
+    said = lambda text: " ".join(text_to_segments(text).phoneme)          # noqa: E731
+    assert said("salt & pepper") == said("salt and pepper")
+    assert said("Dr. Smith") == said("doctor Smith")                   # no sentence pause after the title
+    assert said("Elm Dr. is long") == said("Elm drive. is long")       # an address keeps CMUdict's first
+    assert said("naïve café") == said("naive cafe")

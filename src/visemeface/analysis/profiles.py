@@ -85,7 +85,7 @@ def analyze_frames(frames: Iterable[np.ndarray], box, fps: float, detector: Open
         :func:`~visemeface.analysis.mouthbox.track_mouth`).
     fps : float
     detector : OpeningDetector, optional
-        Settings (default: Otsu, no hull, no teeth handling).
+        Settings (default ``OpeningDetector()``: the ``lips`` method, teeth and tongue counted as opening).
     on_frame : callable(index, frame, openings), optional
         Called after each frame (e.g. to write an overlay).
     """

@@ -111,7 +111,7 @@ def open_frames(path: str | Path, fps: float | None = None) -> FrameSource:
     ----------
     path : str or Path
     fps : float, optional
-        Frame rate; required meaning for folders (default 30), overrides a video's.
+        Frame rate: a folder of frames has none of its own (default 30); overrides a video's.
     """
     path = Path(path)
     if fps is not None and not (np.isfinite(fps) and fps > 0):

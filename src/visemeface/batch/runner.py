@@ -122,19 +122,23 @@ def run(jobs, outdir, client=None, workers: int | None = None, resume: bool = Fa
     for row in rows.values():
         if on_result is not None:
             on_result(row)
+    why = "the batch was interrupted"
     try:
         if todo:
             _submit(todo, outdir, client, workers, force, show_progress, rows, on_result)
+    except Exception as e:                      # not an interrupt: the cluster failed (e.g. workers never started)
+        why = f"the batch stopped: {type(e).__name__}: {e}".splitlines()[0]
+        raise
     finally:
-        write_report(outdir / REPORT, [rows.get(i) or _unfinished(j, outdir) for i, j in enumerate(jobs)])
+        write_report(outdir / REPORT, [rows.get(i) or _unfinished(j, outdir, why) for i, j in enumerate(jobs)])
     return [rows[i] for i in range(len(jobs))]
 
 
-def _unfinished(job: Job, outdir: Path) -> dict:
-    """The report row of a clip whose result never came back (the batch was interrupted)."""
+def _unfinished(job: Job, outdir: Path, why: str) -> dict:
+    """The report row of a clip whose result never came back (the batch stopped: ``why``)."""
     if clip_state(job, outdir) == "done":       # finished while the batch was being stopped
         return report_row(job.clip, "done", 0.0)
-    return report_row(job.clip, "failed", 0.0, "not made: the batch was interrupted")
+    return report_row(job.clip, "failed", 0.0, f"not made: {why}")
 
 
 def _submit(todo, outdir: Path, client, workers, force, show_progress, rows, on_result) -> None:

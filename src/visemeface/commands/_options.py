@@ -115,7 +115,7 @@ def add_physics_arguments(p: argparse.ArgumentParser, default: str, choices: tup
     g.add_argument("--glue-profile", metavar="SPEC", help="glue across the mouth over --glue, e.g. "
                    "centre=0.18 or right=0.3,left=0 (WHERE: centre (the mouth's central twelfth), left, right, corners, "
                    "all, or a..b of s, -1 at the right corner to +1 at the left)")
-    g.add_argument("--moisture", type=float, metavar="M", help="initial saliva moisture 0M (default 100)")
+    g.add_argument("--moisture", type=float, metavar="M", help="initial saliva moisture M0 (default 100)")
     g.add_argument("--evaporation", type=float, metavar="E", help="moisture lost per second (default 0)")
     g.add_argument("--rupture-time", type=float, metavar="S", help="saliva strands thin over S seconds before they "
                    "snap (default 0.03: the lips unzip from the centre; 0: the seed's brittle film)")

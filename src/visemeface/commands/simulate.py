@@ -52,8 +52,9 @@ def register(subparsers) -> None:
         description="Simulate the physically-based sticky-lip face (TLED FEM, breaking saliva elements) "
         "through a scenario and write the animation and the saliva state per frame.",
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("scenario", choices=sorted(SCENARIOS), help="open: opened and closed twice; open-once: "
-                   "opened and held; part: a slight opening")
+    p.add_argument("scenario", choices=sorted(SCENARIOS), help="the jaw eased to --jaw and back: open: opened "
+                   "and closed twice; open-once: opened and held; part: opened to 0.45 of --jaw and held (a "
+                   "slight opening the speech lips' glue holds shut; elastic lips part)")
     phys = opt.add_physics_arguments(p, "sticky", tuple(PHYSICS))
     phys.add_argument("--glue-file", type=Path, metavar="CSV", help="glue per film element (element,glue; "
                       "0 at the right corner, in order across the mouth) or a profile (s,glue)")

@@ -348,6 +348,9 @@ class MuscleRig:
         return self.clamp(a)
 
     def _vector(self, a) -> np.ndarray:
+        if hasattr(a, "columns"):
+            raise InputError("a pose is one posture (a mapping or a vector); for a track (a DataFrame, a row per "
+                             "frame) use rig.poses(track)")
         if isinstance(a, Mapping) or hasattr(a, "items"):
             return self.activation_vector(dict(a.items()))
         a = np.asarray(a, dtype=float)

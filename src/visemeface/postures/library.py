@@ -145,8 +145,10 @@ def blend(viseme: str, emotions: Mapping[str, float] | None = None, w_viseme: fl
     ----------
     viseme : str
         DECtalk symbol (``"ah"``); ``"_"`` (silence) gives the pure expression.
-    emotions : mapping of str to float, optional
-        Emotion name -> weight :math:`w_e \\ge 0`; several emotions mix.
+    emotions : mapping of str to float, or str, optional
+        Emotion name -> weight :math:`w_e \\ge 0`; several emotions mix (a string is read as the
+        command line's ``"happiness=0.6, anger"``; names in any case). Above 1 exaggerates (the
+        notebook's sliders go to 1.5); the command line and a text's emotion tags keep to 0..1.
     w_viseme : float
         Weight :math:`w_v \\ge 0` of the viseme.
     rig : MuscleRig, optional
@@ -175,9 +177,9 @@ def blend(viseme: str, emotions: Mapping[str, float] | None = None, w_viseme: fl
 
     Examples
     --------
-    >>> a = blend("ah", {"happiness": 0.6})          # doctest: +SKIP
-    >>> a["zygomatic_major_left"]                    # doctest: +SKIP
-    0.54
+    >>> a = blend("ah", {"happiness": 0.6})
+    >>> round(float(a["zygomatic_major_left"]), 2)
+    0.6
     """
     if library is None:
         library = _library(rig)
@@ -192,8 +194,12 @@ def blend(viseme: str, emotions: Mapping[str, float] | None = None, w_viseme: fl
         raise InputError(f"unknown viseme {viseme!r}{close_matches(viseme.lower(), visemes.index)}")
     w_v = _weight("viseme", w_viseme)
     total = w_v * visemes.loc[viseme].reindex(list(names), fill_value=0.0).to_numpy(dtype=float)
+    if isinstance(emotions, str):         # "happiness=0.6, anger" as on the command line
+        emotions = parse_weights(emotions)
     for name, w in (emotions or {}).items():
         name = str(name).strip()
+        if name not in expressions.index and name.lower() in expressions.index:
+            name = name.lower()           # emotion names are lower case, as viseme symbols
         if name not in expressions.index:
             raise InputError(f"unknown emotion {name!r}{close_matches(name, expressions.index)}")
         total = total + _weight(name, w) * expressions.loc[name].reindex(list(names), fill_value=0.0).to_numpy(dtype=float)

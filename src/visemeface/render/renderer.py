@@ -320,9 +320,13 @@ class Renderer:
             Posed positions of the face's vertices (rest positions if None).
         """
         import moderngl
+        if self.ctx is None:
+            raise RuntimeError("this renderer is closed (its `with` block has ended); make a new one")
         v = self.face.vertices if vertices is None else np.asarray(vertices)
         if v.shape != (self.face.n_vertices, 3):
             raise InputError(f"vertices must have shape ({self.face.n_vertices}, 3), got {v.shape}")
+        if not np.isfinite(v).all():
+            raise InputError("vertices hold NaN or infinite values")
         self._vbo_data[:, :3] = v
         self._vbo_data[:, 3:] = self._normals(v, dtype=np.float32)
         ctx = self.ctx
@@ -359,7 +363,8 @@ def save_png(path: str | Path, image: np.ndarray, force: bool = False) -> Path:
     """Write an RGB uint8 image as PNG through :func:`visemeface.outputs.atomic_output`."""
     import cv2
 
-    from visemeface.outputs import atomic_output
+    from visemeface.outputs import atomic_output, check_suffix
+    check_suffix(path, ".png")
     image = np.asarray(image)
     if image.dtype != np.uint8 or image.ndim != 3 or image.shape[2] != 3:
         raise ValueError(f"expected a uint8 (H, W, 3) image, got {image.dtype} {image.shape}")

@@ -176,6 +176,13 @@ def letter_to_sound(word: str) -> list[str]:
     return out
 
 
+def _unaccented(word: str) -> str:
+    """``word`` without its diacritics (NFKD, combining marks dropped)."""
+    import unicodedata
+
+    return "".join(c for c in unicodedata.normalize("NFKD", word) if not unicodedata.combining(c))
+
+
 def word_to_arpabet(word: str, warn: bool = True) -> list[str]:
     """ARPAbet phones (with stress digits) of one word.
 
@@ -183,7 +190,7 @@ def word_to_arpabet(word: str, warn: bool = True) -> list[str]:
     spelled by simple letter-to-sound rules and a warning names it.
     """
     key = word.lower().strip("'")
-    entries = _cmudict().get(key)
+    entries = _cmudict().get(key) or _cmudict().get(_unaccented(key))       # naïve, café: naive, cafe
     if entries:
         return list(entries[0])
     if key.endswith("'s") and _cmudict().get(key[:-2]):
@@ -233,8 +240,12 @@ def arpabet_to_dectalk(arpa: list[str]) -> list[tuple[str, int | None]]:
 
 _TAG = re.compile(r"\[([^\[\]]*)\]")
 _TAG_BODY = re.compile(r"^\s*([A-Za-z_][A-Za-z_\-]*)\s*(?:[=:\s]\s*([-+]?(?:\d+\.?\d*|\.\d+)))?\s*$")
+#: Titles before a name, read out (their full stop is no sentence end): "Dr. Smith" is doctor Smith.
+TITLES = {"dr": "doctor", "mr": "mister", "mrs": "missus", "ms": "miz", "prof": "professor", "st": "saint"}
 _TOKEN = re.compile(r"""
     (?P<number>[-−]?(?:\d{1,3}(?:,\d{3})+|\d+)(?:\.\d+)?%?)
+  | (?P<title>\b(?:Dr|Mr|Mrs|Ms|Prof|St)\.(?=\s+[A-Z]))
+  | (?P<and>&)
   | (?P<word>[A-Za-z\u00C0-\u024F]+(?:['’][A-Za-z]+)*)
   | (?P<sentence>\.\.\.|…|[.!?]+)
   | (?P<clause>[;:])
@@ -277,6 +288,10 @@ def _plain_tokens(text: str, start: int, end: int):
                 yield "word", w, line
         elif kind == "word":
             yield "word", m.group(0).replace("’", "'"), line
+        elif kind == "title":
+            yield "word", TITLES[m.group(0)[:-1].lower()], line
+        elif kind == "and":
+            yield "word", "and", line
         else:
             yield "pause", kind, line
 

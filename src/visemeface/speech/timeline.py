@@ -404,6 +404,9 @@ def activation_track(segments: pd.DataFrame, visemes: pd.DataFrame, fps: float =
     """
     from visemeface.speech.utterance import Utterance
 
+    if not isinstance(visemes, pd.DataFrame):
+        raise InputError(f"visemes must be a DataFrame indexed by DECtalk symbol (load_visemes()), "
+                         f"got {type(visemes).__name__}")
     keys = []
     if isinstance(segments, Utterance):
         keys.append(_keys_frame(segments.emotion_keys))
