@@ -71,7 +71,7 @@ def digest(*parts) -> str:
 def face_digest(face) -> str:
     """Digest of what a rendered face depends on besides its motion."""
     return digest(np.asarray(face.vertices, np.float64), np.asarray(face.triangles, np.int64),
-                  np.asarray(face.vertex_colors(), np.float32))
+                  np.asarray(face.vertex_colors(), np.float32), np.asarray(face.vertex_normals(), np.float32))
 
 
 class Motion:

@@ -185,3 +185,18 @@ def test_ampersand_titles_and_accented_words_are_read_as_said():
     assert said("Dr. Smith") == said("doctor Smith")                   # no sentence pause after the title
     assert said("Elm Dr. is long") == said("Elm drive. is long")       # an address keeps CMUdict's first
     assert said("naïve café") == said("naive cafe")
+
+
+@pytest.mark.parametrize("rate", [100, 165, 300])
+def test_no_phone_is_squeezed_below_its_incompressible_part(rate):
+    from visemeface.speech.g2p import durations, timing
+
+    floor = timing()["default_rate_wpm"] / rate
+    seg = text_to_segments("internationalization", rate_wpm=rate)
+    sp = seg[seg.phoneme != "_"]
+    minimum = durations()["minimum"].reindex(sp.phoneme).to_numpy() * floor
+    assert ((sp.end - sp.start).to_numpy() >= minimum - 1e-12).all()
+    assert sp.end.iloc[-1] - sp.start.iloc[0] > 2.5 * 60 / rate           # not one short word's time
+    running = text_to_segments("set white with p two soon", rate_wpm=rate)   # the rate still holds there
+    spoken = running[running.phoneme != "_"]
+    assert (spoken.end - spoken.start).sum() == pytest.approx(6 * 60 / rate, rel=1e-9)
