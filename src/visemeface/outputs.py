@@ -33,9 +33,10 @@ def _umask_mode(mode: int) -> int:
     return mode & ~umask
 
 
-#: What visemeface's folder outputs hold: frame files (PNG, OBJ), the OBJ sequence's palette and
-#: hidden manifests (``.visemeface-frames.json``); staged temporaries (:func:`is_temporary`) too.
-_OURS = re.compile(r"^(frame_\d+\.[A-Za-z0-9]+|face\.mtl|\.visemeface.*)$")
+#: What visemeface's folder outputs hold: frame files (PNG, OBJ) and a frame's temporary left by a killed
+#: run (``.frame_000012.png.tmp``), the OBJ sequence's palette and hidden manifests
+#: (``.visemeface-frames.json``); staged temporaries (:func:`is_temporary`) too.
+_OURS = re.compile(r"^(\.?frame_\d+\.[A-Za-z0-9]+(\.tmp)?|face\.mtl|\.visemeface.*)$")
 
 
 def holds_only_ours(folder: str | Path) -> bool:

@@ -145,7 +145,7 @@ class FramesSink(Sink):
             check_new(self.path, self.force, folder=True)
             if self.partial.exists() and _manifest_key(self.partial) is None:
                 raise InputError("exists and was not made by visemeface; move it away", self.partial)
-        check_new(self.partial, force=True, folder=True)
+        check_new(self.partial, force=True, folder=True, ours=lambda p: _manifest_key(p) is not None)
 
     def targets(self) -> list[Path]:
         return [self.path] + [s.path for s in self.staged]
