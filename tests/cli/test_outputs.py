@@ -90,7 +90,8 @@ def test_wrong_output_suffix_is_refused_before_work(tmp_path, monkeypatch, capsy
 def test_force_replaces_a_folder_of_ours_but_never_a_users_files(tmp_path):
     ours = tmp_path / "frames"
     ours.mkdir()
-    for name in ("frame_000000.png", "frame_000001.obj", "face.mtl", ".visemeface-frames.json", ".frame_000002.png.tmp"):
+    for name in ("frame_000000.png", "frame_000001.obj", "face.mtl", ".visemeface-frames.json",
+                 ".frame_000002.png.tmp"):
         (ours / name).write_bytes(b"old")
     with atomic_dir(ours, force=True) as tmp:
         (tmp / "frame_000000.png").write_bytes(b"new")

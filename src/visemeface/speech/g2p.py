@@ -21,7 +21,7 @@ syllable before a phrase boundary) and consonant shortening. Punctuation
 ends a phrase and inserts a pause. The phone durations are then multiplied by
 one factor :math:`k` so that the spoken time (pauses excluded) equals
 ``n_words * 60 / rate_wpm``, but no phone is made shorter than its incompressible
-:math:`D^{min}_p` at the rate (:math:`D^{min}_p \cdot 165 / \text{rate}`, 165 the default rate): a
+:math:`D^{min}_p` at the rate (:math:`D^{min}_p \\cdot 165 / \\text{rate}`, 165 the default rate): a
 text of one long word ("internationalization": 1.0 s at 165 words/min, not 0.36 s) is not squeezed
 into one word's time. On running text the bound rarely binds (one phone of "Bob moves five boats",
 by 1 ms).
