@@ -31,11 +31,14 @@ def parse_emotions(specs, known: Iterable[str]) -> dict[str, float]:
         if name not in known and name.lower() in known:
             name = name.lower()           # emotion names are lower case, as viseme symbols
         if name not in known:
-            raise InputError(f"unknown emotion {name!r}{close_matches(name, known)}")
+            raise InputError(f"unknown emotion {name!r}{close_matches(name.lower(), known)}")
         emotions[name] = emotions.get(name, 0.0) + weight
     for name, weight in emotions.items():
         if not 0.0 <= weight <= 1.0:
-            raise InputError(f"emotion weight {weight:g} for {name!r} is not in 0..1")
+            given = [s for s in ([specs] if isinstance(specs, str) else specs)
+                     for part in str(s).split(",") if part.partition("=")[0].strip().lower() == name]
+            more = " (its weights given add up)" if len(given) > 1 else ""
+            raise InputError(f"emotion weight {weight:g} for {name!r} is not in 0..1{more}")
     return emotions
 
 

@@ -35,8 +35,8 @@ def _umask_mode(mode: int) -> int:
 
 #: What visemeface's folder outputs hold: frame files (PNG, OBJ) and a frame's temporary left by a killed
 #: run (``.frame_000012.png.tmp``), the OBJ sequence's palette and hidden manifests
-#: (``.visemeface-frames.json``); staged temporaries (:func:`is_temporary`) too.
-_OURS = re.compile(r"^(\.?frame_\d+\.[A-Za-z0-9]+(\.tmp)?|face\.mtl|\.visemeface.*)$")
+#: (``.visemeface-frames.json``); staged temporaries (:func:`is_temporary`) too. Six digits: ``images.FRAME_DIGITS``.
+_OURS = re.compile(r"^(\.?frame_\d{6}\.(png|obj)(\.tmp)?|face\.mtl|\.visemeface.*)$")
 
 
 def holds_only_ours(folder: str | Path) -> bool:
@@ -75,6 +75,8 @@ def check_new(path: str | Path, force: bool = False, folder: bool | None = None,
             raise InputError("output exists and is a folder, not a file", path)
         if folder is True and not path.is_dir():
             raise InputError("output exists and is a file, not a folder", path)
+        if folder is True and path.is_symlink():
+            raise InputError("output folder is a symbolic link; name the folder it points to", path)
         if folder is True and _holds_cwd(path):
             raise InputError("output folder is the current folder or holds it; name a new folder", path)
         if folder is True and not ours(path):

@@ -104,3 +104,33 @@ def test_grid_sample_is_deterministic_distinct_and_in_grammar_order():
     assert grid_rows(2, outputs="gltf")[0]["outputs"] == "gltf"
     with pytest.raises(InputError):
         grid_rows(0)
+
+
+def test_a_default_rate_times_the_text_rows_and_leaves_the_recordings_alone(tmp_path):
+    import shutil
+
+    from visemeface.resources import transcripts_path
+
+    shutil.copy(transcripts_path("set_white_with_p_two_soon.wav"), tmp_path / "a.wav")
+    path = _manifest(tmp_path, "clip,text,audio,rate\n"
+                     "said,set white with p two soon,a.wav,\n"
+                     "typed,one five,,\n"
+                     "both,one five,a.wav,200\n")
+    said, typed, both = read_manifest(path, {"rate": 250})
+    assert said.rate is None and said.audio is not None and typed.rate == 250.0
+    assert isinstance(both, BadRow) and "rate and audio both time the text" in both.error
+
+
+def test_force_remakes_a_clip_folder_only_while_it_holds_nothing_of_the_users(tmp_path):
+    from visemeface.batch.clip import CLIP_RECORD, _our_clip
+
+    clip = tmp_path / "c1"
+    (clip / "frames").mkdir(parents=True)
+    for name in (CLIP_RECORD, "video.mp4", "video.mp4.json", "track.csv"):
+        (clip / name).write_text("x")
+    assert _our_clip(clip)
+    (clip / "frames_backup.txt").write_text("mine")
+    assert not _our_clip(clip)
+    (clip / "frames_backup.txt").unlink()
+    (clip / CLIP_RECORD).unlink()
+    assert not _our_clip(clip)                      # no record: not a batch's clip

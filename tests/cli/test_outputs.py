@@ -129,3 +129,43 @@ def test_the_current_folder_is_never_an_output_folder(tmp_path, monkeypatch, cap
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "current folder" in err
     assert here.is_dir() and list(here.iterdir()) == []
+
+
+def test_force_and_resume_leave_a_users_files_and_links_alone(tmp_path, monkeypatch, capsys):
+    """A user's frame_0001.jpg, a symbolic link to a folder, an output inside a folder output, an overlay
+    over its own input frames, a resumed folder holding a user's file: each refused in one line."""
+    from visemeface.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "b.txt").write_text("0.0 0.1 b\n0.1 0.3 aa\n")
+    speak = ["speak", "b.txt", "--no-video", "--size", "64", "-q"]
+    (tmp_path / "shots").mkdir()
+    (tmp_path / "shots" / "frame_0001.jpg").write_bytes(b"a user's picture")
+    (tmp_path / "real").mkdir()
+    (tmp_path / "link").symlink_to(tmp_path / "real")
+    assert main(speak + ["--frames", "fr", "-q"]) == 0
+    (tmp_path / "mine").mkdir()
+    cases = [(speak + ["--frames", "shots", "--force"], "did not write"),
+             (speak + ["--frames", "link", "--force"], "symbolic link"),
+             (["speak", "b.txt", "--size", "64", "--frames", "fr", "-o", "fr/v.mp4", "--force"], "inside the frames"),
+             (speak + ["--frames", "mine", "--obj", "mine/objs", "--force"], "inside the frames"),
+             (["analyze", "fr", "-o", "fr.csv", "--overlay", "fr", "--force"], "overwrite the input")]
+    for argv, message in cases:
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and message in err, (argv, err)
+    (tmp_path / "fr" / "notes.txt").write_text("mine")
+    assert main(speak + ["--frames", "fr", "--resume"]) == 2
+    assert "did not write" in capsys.readouterr().err
+    assert (tmp_path / "fr" / "notes.txt").read_text() == "mine"
+    assert (tmp_path / "shots" / "frame_0001.jpg").exists() and not list((tmp_path / "real").iterdir())
+
+
+def test_only_the_timed_phones(tmp_path, monkeypatch, capsys):
+    from visemeface.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["say", "bob moves", "--no-video", "--save-transcript", "t.lab", "-q"]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.lab"]
+    assert main(["say", "bob", "--no-video"]) == 2
+    assert "nothing to write" in capsys.readouterr().err

@@ -199,3 +199,14 @@ def test_landmarks_path_that_is_a_folder_is_a_one_line_error(tmp_path):
     face.save(tmp_path / "m.obj")
     with pytest.raises(InputError, match="cannot read"):
         load_face(tmp_path / "m.obj", landmarks_path=tmp_path)
+
+
+def test_the_face_command_exports_one_face_in_two_formats(tmp_path, monkeypatch, capsys):
+    from visemeface.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["face", "--export", "head.obj"]) == 0
+    assert main(["face", "--export", "head.glb"]) == 0          # the same landmarks beside both
+    assert main(["face", "--resolution", "1500", "--export", "head.ply"]) == 2    # other landmarks: refused
+    assert "head.landmarks.json: output exists" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["head.glb", "head.landmarks.json", "head.obj"]

@@ -72,6 +72,16 @@ def _utterance(job: Job):
     return timed_text(job.text, job.rate, job.audio)
 
 
+def _our_clip(folder: Path) -> bool:
+    """A clip folder ``--force`` may replace: made by a batch (its record) and holding nothing else but
+    sink outputs (``video.mp4``, ``video.mp4.json``, ``frames``, ...) and staged temporaries."""
+    from visemeface.export import SINKS
+    from visemeface.outputs import is_temporary
+
+    return (folder / CLIP_RECORD).is_file() and all(
+        p.name == CLIP_RECORD or p.name.split(".")[0] in SINKS or is_temporary(p) for p in folder.iterdir())
+
+
 def _make(job: Job, folder: Path, force: bool) -> int:
     """Make the clip into ``folder`` (staged); returns its frame count."""
     from visemeface import __version__
@@ -85,7 +95,7 @@ def _make(job: Job, folder: Path, force: bool) -> int:
     render = RenderSettings(size=job.size, view=job.view, msaa=job.msaa).check()
     utterance = _utterance(job)
     rig = _rig(job.face, job.landmarks, job.rig)
-    staged = Staged(folder, force=force, folder=True, ours=lambda p: (p / CLIP_RECORD).is_file())
+    staged = Staged(folder, force=force, folder=True, ours=_our_clip)
     tmp = staged.open()
     try:
         sinks = [SINKS[name](tmp / output_name(name)) for name in job.outputs]

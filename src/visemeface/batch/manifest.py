@@ -205,7 +205,10 @@ def read_manifest(path, settings: dict | None = None) -> list[Job | BadRow]:
                 raise InputError(f"clip id {clip!r} repeats line {seen[clip]}")
             seen[clip] = line
             cells = {k: v for k, v in row.items() if k != "clip" and v not in (None, "")}
-            checked = check_settings({**settings, **cells}, path.parent)
+            given = {**settings, **cells}
+            if "audio" in cells and "rate" not in cells:
+                given.pop("rate", None)   # a default rate is for the text rows; a recording times its own
+            checked = check_settings(given, path.parent)
             out.append(Job(clip=clip, **{k: checked.get(k, settings.get(k)) for k in _JOB_FIELDS}))
         except InputError as e:
             out.append(BadRow(clip or f"row {line}", f"{path.name}:{line}: {e}"))

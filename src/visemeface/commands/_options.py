@@ -96,7 +96,7 @@ def sinks_from_args(args, default_video: Path, defaults: dict | None = None) -> 
     for name, path in (defaults or {}).items():
         if not any(s.name == name for s in sinks):
             sinks.append(SINKS[name](path, force=args.force))
-    if not sinks:
+    if not sinks and getattr(args, "save_transcript", None) is None:
         raise InputError("nothing to write: --no-video and no other output")
     check_distinct(sinks)
     return sinks

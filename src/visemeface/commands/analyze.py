@@ -159,7 +159,10 @@ def run(args) -> int:
     outputs = [args.output] + [p for p in (args.plot, args.overlay) if p]
     if len(set(map(str, outputs))) != len(outputs):
         raise InputError("the CSV, plot and overlay outputs must be different paths")
+    source_path = Path(args.input).resolve()
     for out in outputs:
+        if Path(out).resolve() in (source_path, *source_path.parents):
+            raise InputError("the output would overwrite the input; name another", out)
         check_new(out, args.force)
 
     fps = args.fps

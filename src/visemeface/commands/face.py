@@ -65,8 +65,9 @@ def run(args) -> int:
         raise InputError("the image must be a .png file", args.output)
     if len({p.resolve() for p in outputs}) != len(outputs):
         raise InputError("the outputs must be different files")
-    for out in outputs:           # refuse before doing any work
-        check_new(out, args.force)
+    for out in outputs:           # refuse before doing any work; the landmarks file when the face is known
+        if not (args.export and out == sidecar_path(args.export)):   # (the same one beside it is kept: save)
+            check_new(out, args.force)
 
     if args.mesh:
         face = load_face(args.mesh, args.landmarks)

@@ -79,7 +79,7 @@ def check_early(args, default_video: Path, inputs=()):
     targets = [t for s in sinks for t in s.targets()]
     for target in targets + ([saved.path] if saved is not None else []):
         if Path(target).resolve() in inputs:
-            raise InputError("the output would overwrite an input; name another with -o", target)
+            raise InputError("the output would overwrite an input; name another output", target)
     if saved is not None and Path(saved.path).resolve() in {Path(t).resolve() for t in targets}:
         raise InputError("--save-transcript and another output are the same path", saved.path)
     return sinks, render, opt.physics_from_args(args), saved
@@ -98,12 +98,12 @@ def animate_utterance(utterance, args, sinks, render, physics, audio=None, saved
     try:
         if saved is not None:
             write_transcript(utterance, saved.open(), fmt=format_of(saved.path), force=True)
-        stats = animate(utterance, sinks, render, rig=opt.build_rig(args), emotions=args.emotion,
-                        interp=args.interp, fps=args.fps, audio=args.audio if audio is None else audio,
-                        physics=args.physics, physics_settings=physics,
-                        checkpoint=lambda motion: opt.checkpoint_of(motion, sinks, args), resume=args.resume,
-                        show_progress=not args.quiet, source=str(getattr(args, "transcript", None) or "text"),
-                        blink=not args.no_blink)
+        stats = None if not sinks else animate(   # no sinks: only the timed phones (--no-video --save-transcript)
+            utterance, sinks, render, rig=opt.build_rig(args), emotions=args.emotion, interp=args.interp,
+            fps=args.fps, audio=args.audio if audio is None else audio, physics=args.physics,
+            physics_settings=physics, checkpoint=lambda motion: opt.checkpoint_of(motion, sinks, args),
+            resume=args.resume, show_progress=not args.quiet, source=str(getattr(args, "transcript", None) or "text"),
+            blink=not args.no_blink)
     except BaseException:
         if saved is not None:
             saved.abort()
@@ -111,7 +111,8 @@ def animate_utterance(utterance, args, sinks, render, physics, audio=None, saved
     if saved is not None:
         saved.commit()
     if not args.quiet:
-        print(pipeline.summary(stats, args.fps))
+        if stats is not None:
+            print(pipeline.summary(stats, args.fps))
         if saved is not None:
             print(f"timed phones -> {saved.path}")
     return 0

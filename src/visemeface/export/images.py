@@ -24,7 +24,7 @@ import numpy as np
 from visemeface import __version__
 from visemeface.errors import InputError
 from visemeface.export.sinks import Sink, register
-from visemeface.outputs import Staged, atomic_dir, check_new, output_path
+from visemeface.outputs import Staged, atomic_dir, check_new, holds_only_ours, output_path
 
 #: Digits of the zero-padded frame number in sequence file names.
 FRAME_DIGITS = 6
@@ -140,6 +140,9 @@ class FramesSink(Sink):
             for cand in found:
                 if _manifest_key(cand) is None:
                     raise InputError("cannot resume: no visemeface frame manifest here", cand)
+                if not holds_only_ours(cand):      # resuming prunes the folder to its frames: never a user's file
+                    raise InputError("cannot resume: the folder holds files visemeface did not write; move them",
+                                     cand)
             self._source = found[0] if found else None
         else:
             check_new(self.path, self.force, folder=True)

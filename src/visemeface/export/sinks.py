@@ -191,7 +191,8 @@ def sinks_from_args(args, force: bool, skip: tuple[str, ...] = (), video: Path |
 
 
 def check_distinct(sinks: list[Sink]) -> None:
-    """Refuse two outputs of one run that are the same path."""
+    """Refuse two outputs of one run that are the same path, or one inside another's folder (committing the
+    folder would replace it)."""
     seen: dict[Path, str] = {}
     for s in sinks:
         for p in s.targets():
@@ -199,3 +200,9 @@ def check_distinct(sinks: list[Sink]) -> None:
             if r in seen:
                 raise InputError(f"the {s.name} and {seen[r]} outputs are the same path", p)
             seen[r] = s.name
+    folders = {s.path.resolve(): s.name for s in sinks if s.folder}
+    for r, name in seen.items():
+        inside = next((f for f in r.parents if f in folders), None)
+        if inside is not None:
+            raise InputError(f"the {name} output lies inside the {folders[inside]} output's folder, which the run "
+                             "replaces; name another place", r)

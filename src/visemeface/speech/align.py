@@ -287,7 +287,7 @@ def _check_match(aligned, where) -> float:
     per_frame = sum(s for s, _ in speech) / max(frames, 1.0)
     if per_frame < MISMATCH_SCORE:
         raise InputError(f"the text does not match the audio (acoustic score {per_frame:.1f} per frame, "
-                         f"below {MISMATCH_SCORE:g}); check the words, or leave --text out to recognise the phones",
+                         f"below {MISMATCH_SCORE:g}); check the words (or give none: the phones are then recognised)",
                          where)
     return per_frame
 

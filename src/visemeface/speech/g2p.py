@@ -244,11 +244,12 @@ def arpabet_to_dectalk(arpa: list[str]) -> list[tuple[str, int | None]]:
 
 _TAG = re.compile(r"\[([^\[\]]*)\]")
 _TAG_BODY = re.compile(r"^\s*([A-Za-z_][A-Za-z_\-]*)\s*(?:[=:\s]\s*([-+]?(?:\d+\.?\d*|\.\d+)))?\s*$")
-#: Titles before a name, read out (their full stop is no sentence end): "Dr. Smith" is doctor Smith.
-TITLES = {"dr": "doctor", "mr": "mister", "mrs": "missus", "ms": "miz", "prof": "professor", "st": "saint"}
+#: Titles before a name, read out (their full stop is no sentence end): "Dr. Smith" is doctor Smith;
+#: those CMUdict reads otherwise (Dr. as drive, St. as street, Prof. not at all); Mr., Mrs., Ms. as it has them.
+TITLES = {"dr": "doctor", "prof": "professor", "st": "saint"}
 _TOKEN = re.compile(r"""
     (?P<number>[-−]?(?:\d{1,3}(?:,\d{3})+|\d+)(?:\.\d+)?%?)
-  | (?P<title>\b(?:Dr|Mr|Mrs|Ms|Prof|St)\.(?=\s+[A-Z]))
+  | (?P<title>\b(?i:Dr|Mr|Mrs|Ms|Prof|St)\.(?=\s*[A-Z]))
   | (?P<and>&)
   | (?P<word>[A-Za-z\u00C0-\u024F]+(?:['’][A-Za-z]+)*)
   | (?P<sentence>\.\.\.|…|[.!?]+)
@@ -293,7 +294,8 @@ def _plain_tokens(text: str, start: int, end: int):
         elif kind == "word":
             yield "word", m.group(0).replace("’", "'"), line
         elif kind == "title":
-            yield "word", TITLES[m.group(0)[:-1].lower()], line
+            title = m.group(0)[:-1].lower()
+            yield "word", TITLES.get(title, title), line
         elif kind == "and":
             yield "word", "and", line
         else:
