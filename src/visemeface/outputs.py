@@ -92,6 +92,16 @@ def check_new(path: str | Path, force: bool = False, folder: bool | None = None,
     return path
 
 
+def check_not_inputs(targets, inputs, what: str = "an input") -> None:
+    """Refuse an output that is one of ``inputs`` or a folder holding one: writing it would overwrite, or
+    replacing the folder delete, what the run reads. ``what`` names the input in the message."""
+    inputs = [Path(p).resolve() for p in inputs]
+    for target in targets:
+        r = output_path(target).resolve()
+        if any(r == i or r in i.parents for i in inputs):
+            raise InputError(f"the output would overwrite {what}; name another output", target)
+
+
 def check_suffix(path: str | Path, *suffixes: str) -> Path:
     """Refuse an output whose name does not end in one of ``suffixes`` (e.g. ".png")."""
     path = Path(path)

@@ -137,7 +137,7 @@ def run(args) -> int:
     from visemeface.analysis.profiles import analyze_source, plot_profiles, write_profile
     from visemeface.analysis.video import open_frames, parse_box, read_sidecar, sidecar_path
     from visemeface.errors import InputError
-    from visemeface.outputs import atomic_dir, check_new, check_suffix
+    from visemeface.outputs import atomic_dir, check_new, check_not_inputs, check_suffix
 
     detector = OpeningDetector(threshold=_threshold(args.threshold), hull=args.hull, teeth=args.teeth,
                                min_area=args.min_area, pad=_pad(args.pad), method=args.method,
@@ -159,10 +159,8 @@ def run(args) -> int:
     outputs = [args.output] + [p for p in (args.plot, args.overlay) if p]
     if len(set(map(str, outputs))) != len(outputs):
         raise InputError("the CSV, plot and overlay outputs must be different paths")
-    source_path = Path(args.input).resolve()
+    check_not_inputs(outputs, [args.input], "the input")
     for out in outputs:
-        if Path(out).resolve() in (source_path, *source_path.parents):
-            raise InputError("the output would overwrite the input; name another", out)
         check_new(out, args.force)
 
     fps = args.fps

@@ -67,6 +67,7 @@ def check_early(args, default_video: Path, inputs=()):
     refuses an output that is one of ``inputs`` (paths) or another output.
     """
     from visemeface.errors import InputError
+    from visemeface.outputs import check_not_inputs
     from visemeface.pipeline import check_audio
 
     sinks = opt.sinks_from_args(args, default_video)
@@ -75,11 +76,9 @@ def check_early(args, default_video: Path, inputs=()):
     if args.audio is not None:
         check_audio(args.audio)
     saved = _transcript_target(args)
-    inputs = {Path(p).resolve() for p in inputs} | ({args.audio.resolve()} if args.audio is not None else set())
     targets = [t for s in sinks for t in s.targets()]
-    for target in targets + ([saved.path] if saved is not None else []):
-        if Path(target).resolve() in inputs:
-            raise InputError("the output would overwrite an input; name another output", target)
+    check_not_inputs(targets + ([saved.path] if saved is not None else []),
+                     [*inputs, *([args.audio] if args.audio is not None else [])])
     if saved is not None and Path(saved.path).resolve() in {Path(t).resolve() for t in targets}:
         raise InputError("--save-transcript and another output are the same path", saved.path)
     return sinks, render, opt.physics_from_args(args), saved
