@@ -38,6 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
+from visemeface.analysis.profiles import opening_onsets, rise_exponent
 from visemeface.face.procedural import default_face
 from visemeface.muscles.rig import MuscleRig
 from visemeface.physics import drive
@@ -82,21 +83,28 @@ def zipper_measures(sim, frames, fps):
     full = float(spans.max())
     k_full = int(np.flatnonzero(spans >= 0.95 * full)[0])
     centre = int(np.argmin(np.abs(s)))
-    h = np.array([f["gap"][centre] for f in frames[k0 - 1:k_full + 1]])
-    t = np.arange(len(h)) / fps
-    ok = h > 1e-4
-    expo = float(np.polyfit(np.log(t[ok][1:] + 1e-9), np.log(h[ok][1:]), 1)[0]) if ok.sum() > 3 else None
+    h = np.array([f["gap"][centre] for f in frames[k0:]])
+    expo = rise_exponent(h)
     return {"opens": True, "first_open_frame": k0, "first_open_abs_s": round(where, 3),
             "centre_first": bool(where < 0.15), "distinct_widths": int(len(np.unique(np.round(spans[k0:k_full + 1], 4)))),
             "full_span": round(full, 3), "first_to_full_s": round((k_full - k0) / fps, 4),
             "share_within_2_frames": round(float(spans[min(k0 + 2, len(spans) - 1)] / full), 3),
-            "centre_height_exponent": None if expo is None else round(expo, 3),
+            "centre_height_exponent": None if np.isnan(expo) else round(expo, 3),
+            "centre_height_from_2_before": np.round([f["gap"][centre] for f in frames[max(k0 - 2, 0):k0 + 8]], 4),
             "spans": np.round(spans[k0:k_full + 1], 3)}
 
 
 def seen_in_video(renderer, frames, fps):
     """The run's frames rendered (mouth view) and ``visemeface analyze``'s profile of them by seed 001's
-    method: (images, profile)."""
+    method (``--method seed``): (images, profile).
+
+    Its grey threshold sees the first dark pixels, not the lips parting. Seed 001's face had no teeth;
+    ours has, and they fill a small central opening, so the glued zipper is seen only once the cavity
+    shows dark beside them (frame 37 at 60 fps, against the mesh's 26; ``--teeth`` does not help, as it counts
+    teeth only where they touch a dark cavity). The default ``lips`` method, for its part, takes the
+    glued upper lip's shaded underside for an opening before the lips part. The mesh is the measure
+    of when and where the lips part; the video, of what a camera would see.
+    """
     from visemeface.analysis.openings import OpeningDetector
     from visemeface.analysis.profiles import analyze_frames
     imgs = [renderer.render(f["d"]) for f in frames]
@@ -118,7 +126,8 @@ def write_strips(strips, name: str) -> None:
 
 
 def video_zipper(fem, runs, fps):
-    """Seed-001 analysis of rendered frames (``visemeface analyze``'s profile) and a picture strip."""
+    """Seed-001 analysis of rendered frames (``visemeface analyze``'s profile) and a picture strip of
+    each run from the mesh's first opening to its widest."""
     from visemeface.render.renderer import Renderer
     r = Renderer(fem.face, size=(512, 512), view="mouth")
     strips = []
@@ -128,11 +137,17 @@ def video_zipper(fem, runs, fps):
         opened = np.flatnonzero(vw > 0)
         first = int(opened[0]) if len(opened) else None
         full = int(np.flatnonzero(vw >= 0.9 * vw.max())[0]) if len(opened) else None
+        onset = opening_onsets(prof, window=len(prof))
+        expo = onset["height_exponent"].iloc[0] if len(onset) else np.nan
         emit(figure="zipper_video", run=name, width=np.round(vw, 3), count=prof["count"].to_numpy(),
              first_open_frame=first, frames_to_90pct=None if first is None else full - first + 1,
+             height_exponent=None if np.isnan(expo) else round(float(expo), 3),
              distinct_widths=int(len(np.unique(np.round(vw[vw > 0], 3)))))
-        k = first if first is not None else len(imgs) // 2
-        last = full if full is not None else k + 5
+        # the strip runs from the mesh's first opening to its widest: the parting itself, which the
+        # grey threshold sees late (seen_in_video)
+        m = zipper_measures(*runs[name], fps)
+        k = m["first_open_frame"] if m["opens"] else len(imgs) // 2
+        last = k + int(round(m["first_to_full_s"] * fps)) if m["opens"] else k + 5
         strips.append(strip(imgs, k - 1, max(last + 1, k + 6)))
     write_strips(strips, IMAGE)
 

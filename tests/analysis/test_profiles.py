@@ -6,7 +6,7 @@ import pytest
 
 from visemeface.analysis.openings import OpeningDetector
 from visemeface.analysis.profiles import (
-    COLUMNS, analyze_frames, l2_distance, opening_onsets, plot_profiles, read_profile, write_profile)
+    COLUMNS, analyze_frames, l2_distance, opening_onsets, plot_profiles, read_profile, rise_exponent, write_profile)
 from visemeface.analysis.synthetic import merging_mouth_frames
 from visemeface.errors import InputError
 
@@ -209,6 +209,19 @@ def _onset_profile(count, width, height, fps=25.0):
     frame = np.arange(len(count))
     return pd.DataFrame({"frame": frame, "time": frame / fps, "count": count, "area": np.zeros(len(count)),
                          "width": width, "height": height})
+
+
+def test_rise_exponent_fits_the_rise_not_the_plateau():
+    # h = 0.01 t^2 rises for 5 frames, then wobbles on a plateau (its highest frame far out on it):
+    # the fit ends where the rise reaches 95 % of the highest, so the plateau does not make it taper
+    t = np.arange(1, 6, dtype=float)
+    plateau = 0.25 + 0.002 * np.sin(np.arange(30))
+    assert rise_exponent(np.r_[0.01 * t ** 2, plateau]) == pytest.approx(2.0, abs=0.02)
+    assert rise_exponent(np.r_[0.2 * t ** 0.5, 0.2 * np.sqrt(5) * np.ones(10)]) == pytest.approx(0.5, abs=0.02)
+    # frames with no height yet are left out of the log fit; under 3 frames there is nothing to fit
+    assert rise_exponent([0.0, 0.02, 0.045, 0.08]) == pytest.approx(2.0)
+    assert np.isnan(rise_exponent([0.1, 0.2])) and np.isnan(rise_exponent([0.0, 0.0, 0.0]))
+    assert np.isnan(rise_exponent([]))
 
 
 def test_opening_onsets_measure_how_each_opening_grows():

@@ -305,6 +305,32 @@ def correlation(a: pd.DataFrame, b: pd.DataFrame, columns: Iterable[str] = METRI
     return {"r": r0, "lag": best, "lag_s": best * dt, "r_lag": best_r if np.isfinite(best_r) else float("nan")}
 
 
+#: An opening's rise ends on its first frame at this share of its highest: the highest frame itself
+#: can lie far out on a plateau whose height only wobbles, and a fit through the plateau tapers
+#: whatever the rise did.
+RISE_TOP = 0.95
+
+
+def rise_exponent(height) -> float:
+    """Power-law exponent :math:`p` of an opening's height rising as :math:`h \\propto t^p`.
+
+    ``height`` holds the opening's heights on the frames since the last closed one, so that the
+    first is :math:`t = 1`. The fit (least squares of :math:`\\log h` over :math:`\\log t`) runs up
+    to the first frame at :data:`RISE_TOP` of the highest, over the frames with :math:`h > 0`.
+    Seed 001, Fig. 19: :math:`p < 1` opens fast and tapers, :math:`p > 1` opens slowly, then faster.
+    NaN with fewer than 3 such frames.
+    """
+    h = np.asarray(height, dtype=float)
+    if not h.size or not np.isfinite(h).all() or h.max() <= 0:
+        return float("nan")
+    top = int(np.flatnonzero(h >= RISE_TOP * h.max())[0]) + 1
+    t, h = np.arange(1, top + 1, dtype=float), h[:top]
+    ok = h > 0
+    if ok.sum() < 3:
+        return float("nan")
+    return float(np.polyfit(np.log(t[ok]), np.log(h[ok]), 1)[0])
+
+
 def opening_onsets(df: pd.DataFrame, window: int = 6) -> pd.DataFrame:
     """How each mouth opening grows: one row per onset (an open frame after a closed one).
 
@@ -312,9 +338,7 @@ def opening_onsets(df: pd.DataFrame, window: int = 6) -> pd.DataFrame:
     frames up to the next closed one, at most ``window`` long. Columns: ``frame`` and ``time`` of the
     onset, ``frames`` (the run's length), ``peak_width`` (widest in the run), ``frames_to_90pct`` (the
     run's first frame at >= 90 % of that width, 1 = the onset frame itself: a release that is full
-    width as soon as it is seen) and ``height_exponent``: the slope of log height over log frames
-    since the last closed frame (1, 2, ...), up to the run's highest frame, when that is 3 or more
-    frames (seed 001, Fig. 19: < 1 opens fast and tapers, > 1 opens slowly then faster), else NaN.
+    width as soon as it is seen) and ``height_exponent``: :func:`rise_exponent` of the run's heights.
     """
     count = df["count"].to_numpy()
     width, height = df["width"].to_numpy(float), df["height"].to_numpy(float)
@@ -323,10 +347,8 @@ def opening_onsets(df: pd.DataFrame, window: int = 6) -> pd.DataFrame:
         run = k + np.arange(min(window, len(count) - k))
         run = run[:np.argmax(count[run] == 0)] if (count[run] == 0).any() else run
         w, h = width[run], height[run]
-        top = int(np.argmax(h)) + 1
-        expo = float(np.polyfit(np.log(np.arange(1, top + 1)), np.log(h[:top]), 1)[0]) if top >= 3 else np.nan
         rows.append((int(k), float(df["time"].iloc[k]), len(run), float(w.max()),
-                     int(np.argmax(w >= 0.9 * w.max())) + 1, expo))
+                     int(np.argmax(w >= 0.9 * w.max())) + 1, rise_exponent(h)))
     return pd.DataFrame(rows, columns=["frame", "time", "frames", "peak_width", "frames_to_90pct",
                                        "height_exponent"])
 
