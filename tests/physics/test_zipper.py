@@ -88,7 +88,8 @@ def test_lips_refined_along_the_seam_unzip_the_default_face_from_the_centre():
     held at 0.35 and stops short of the corners, which stay joined (seed 000 Fig. 7: at a slight
     opening sticky lips stay joined toward the corners; measured 0.71 of the mouth against elastic's
     0.95); opened on to 0.6 the lips let go there too and end where the elastic lips do. These are the
-    speech commands' lips (:meth:`PhysicsSettings.speech`)."""
+    speech commands' lips (:meth:`PhysicsSettings.speech`). The centre's height rises slowly, then
+    fast, as seed 001 Fig. 19's sticky and real mouths; the elastic one fast, then tapering."""
     from visemeface.face.procedural import default_face
     from visemeface.physics.scenarios import make_track, smoothstep_keyframes
     from visemeface.runtime import set_threads
@@ -116,6 +117,12 @@ def test_lips_refined_along_the_seam_unzip_the_default_face_from_the_centre():
     e0 = int(np.flatnonzero(es > 0)[0])
     assert e0 < k0 and es[e0 + 2] >= 0.8 * es.max()                      # elastic: earlier, most in 2 frames
     assert spans.max() < 0.85 * es.max()                                # the corners stay joined at jaw 0.35
+    # the centre's height (seed 001 Fig. 19): held by the stretched film over its rupture time, then
+    # the snap (slowly, then faster: exponent > 1); the elastic lips follow the eased jaw and taper
+    from visemeface.analysis.profiles import rise_exponent
+    c = int(np.argmin(np.abs(sim.film.s)))
+    assert rise_exponent([f[2][c] for f in out["sticky"][k0:held + 1]]) > 1
+    assert rise_exponent([f[2][c] for f in out["elastic"][e0:held + 1]]) < 1
     lips = np.unique(np.concatenate([fem.face.region("upper_lip"), fem.face.region("lower_lip")]))
     d = out["sticky"][-1][0][lips] - out["elastic"][-1][0][lips]
     assert np.sqrt(np.mean(np.sum(d * d, axis=1))) <= 0.01 * fem.mouth_width   # the same open mouth at 0.6
