@@ -148,6 +148,16 @@ def test_lipsync_takes_the_words_of_a_text_beside_the_recording(vowels_wav, tmp_
     assert main(["lipsync", "take.wav", "--text", "ah", "--text-file", "take.txt", "-o", "x.lab"]) == 2
     assert main(["lipsync", "take.wav", "-o", "take.json"]) == 2                 # exists: --force
     assert "--force" in capsys.readouterr().err
+    # the words read are an input: no output replaces them, --force or not (the next alignment would fail)
+    (tmp_path / "words.txt").write_text("ah ee\n")
+    for argv in (["lipsync", "take.wav", "-o", "take.txt", "--force"],
+                 ["lipsync", "take.wav", "--text-file", "words.txt", "-o", "words.txt", "--force"],
+                 ["speak", "take.wav", "--no-video", "--save-transcript", "take.txt", "--force"],
+                 ["speak", "take.wav", "--text-file", "words.txt", "--no-video", "--save-transcript",
+                  "words.txt", "--force"]):
+        assert main(argv) == 2, argv
+        assert "overwrite an input" in capsys.readouterr().err
+    assert (tmp_path / "take.txt").read_text() == "ah ee\n" == (tmp_path / "words.txt").read_text()
 
 
 @pytest.mark.realdata

@@ -48,13 +48,15 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     from visemeface.errors import InputError
-    from visemeface.outputs import check_new
+    from visemeface.outputs import check_new, check_not_inputs
     from visemeface.speech.writers import format_of, write_transcript
 
     if not args.recording.is_file():
         raise InputError("recording not found", args.recording)
     out = args.output if args.output is not None else Path.cwd() / (args.recording.stem + ".TextGrid")
     format_of(out)
+    words = opt.words_path(args.recording, args.text, args.text_file)
+    check_not_inputs([out], [args.recording, *([words] if words else [])])
     check_new(out, args.force)
     utterance = opt.recording_utterance(args.recording, args.text, args.text_file, args.quiet)
     write_transcript(utterance, out, force=args.force)

@@ -183,12 +183,13 @@ def run(args) -> int:
     import tempfile
 
     from visemeface.errors import InputError
-    from visemeface.speech.audio import media_wav
+    from visemeface.speech.audio import is_recording, media_wav
 
     if not args.transcript.is_file():
         raise InputError("transcript not found", args.transcript)
+    words = opt.words_path(args.transcript, args.text, args.text_file) if is_recording(args.transcript) else None
     sinks, render, physics, saved = check_early(args, Path.cwd() / (args.transcript.stem + ".mp4"),
-                                                inputs=[args.transcript])
+                                                inputs=[args.transcript, *([words] if words else [])])
     utterance, recording = _read_input(args)
     with tempfile.TemporaryDirectory(prefix="visemeface-") as folder:
         sound = None if recording is None else media_wav(recording, folder)
