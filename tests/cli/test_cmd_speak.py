@@ -414,6 +414,9 @@ def test_speak_physics_frames_come_from_the_fem_face(short, capsys, coarse_rig):
     (["--physics", "sticky", "--seam-elements", "-1"], "--seam-elements must be in 0..192"),
     (["--physics", "sticky", "--seam-elements", "4800"], "--seam-elements must be in 0..192"),
     (["--seam-elements", "48"], "--seam-elements needs --physics sticky or elastic"),
+    (["--physics", "elastic", "--glue", "0.3"], "--glue sets the glue between the lips, which --physics elastic"),
+    (["--physics", "elastic", "--moisture", "50"], "--moisture sets the glue"),
+    (["--measures", "m.csv"], "--measures writes a simulation's figures: it needs --physics"),
 ])
 def test_speak_physics_bad_input_exits_2_before_simulating(short, capsys, coarse_rig, monkeypatch, extra,
                                                            message):
@@ -428,7 +431,7 @@ def test_speak_physics_bad_input_exits_2_before_simulating(short, capsys, coarse
     code = main(["speak", "tiny.txt", "--face", "coarse.obj", "--size", "64"] + extra)
     err = capsys.readouterr().err
     assert code == 2 and message in err and err.count("\n") == 1
-    assert not (short / "tiny.mp4").exists()
+    assert not (short / "tiny.mp4").exists() and not (short / "m.csv").exists()
 
 
 def test_the_speech_lips_glue_the_mouth_corners_unless_told_not_to():

@@ -135,6 +135,10 @@ def add_physics_arguments(p: argparse.ArgumentParser, default: str, choices: tup
 MAX_SEAM_ELEMENTS = 192
 
 
+#: Options of the glue alone: the elastic face is the sticky one with no glue (``--physics elastic`` refuses them).
+GLUE_OPTIONS = ("glue", "glue_profile", "moisture", "evaporation", "critical_moisture")
+
+
 def physics_from_args(args, **more):
     """:class:`PhysicsSettings` of the options (checked), or None for ``--physics none``."""
     from visemeface.errors import InputError
@@ -146,6 +150,11 @@ def physics_from_args(args, **more):
         if given:
             raise InputError(f"{given[0]} needs --physics sticky or elastic")
         return None
+    if args.physics == "elastic":
+        glue = [f"--{n.replace('_', '-')}" for n in GLUE_OPTIONS if getattr(args, n, None) is not None]
+        if glue:
+            raise InputError(f"{glue[0]} sets the glue between the lips, which --physics elastic leaves out; "
+                             "use --physics sticky")
     from visemeface.physics.drive import PhysicsSettings
 
     params = {}

@@ -81,7 +81,12 @@ def check_early(args, default_video: Path, inputs=()):
                      [*inputs, *([args.audio] if args.audio is not None else [])])
     if saved is not None and Path(saved.path).resolve() in {Path(t).resolve() for t in targets}:
         raise InputError("--save-transcript and another output are the same path", saved.path)
-    return sinks, render, opt.physics_from_args(args), saved
+    physics = opt.physics_from_args(args)
+    if physics is None:
+        for s in sinks:
+            if s.needs_physics:
+                raise InputError(f"--{s.name} writes a simulation's figures: it needs --physics sticky or elastic")
+    return sinks, render, physics, saved
 
 
 def animate_utterance(utterance, args, sinks, render, physics, audio=None, saved=None) -> int:

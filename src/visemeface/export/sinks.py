@@ -79,7 +79,8 @@ class Sink:
     and ``--NAME`` option unless ``option`` says otherwise), ``metavar``,
     ``help``, ``aliases`` (more option strings), ``suffixes`` (accepted file name endings; empty: any) and
     ``folder`` (the output is a folder). ``needs_image`` asks the run to render
-    each frame.
+    each frame; ``needs_physics`` says the output holds a simulation's own figures (a kinematic run
+    refuses it).
     """
 
     name: ClassVar[str] = ""
@@ -90,6 +91,7 @@ class Sink:
     suffixes: ClassVar[tuple[str, ...]] = ()
     folder: ClassVar[bool] = False
     needs_image: ClassVar[bool] = False
+    needs_physics: ClassVar[bool] = False
     #: A suffix (".html") lets the option be given without a path: the output goes beside the video
     #: (its name with this suffix).
     beside_video: ClassVar[str] = ""

@@ -32,8 +32,9 @@ class MeasuresSink(Sink):
     name = "measures"
     aliases = ("--csv",)
     metavar = "FILE.csv"
-    help = "also write each frame's measures as CSV (a simulation's saliva state)"
+    help = "also write each frame's measures as CSV (a --physics simulation's saliva state)"
     suffixes = (".csv",)
+    needs_physics = True
 
     def open(self, run) -> None:
         super().open(run)
