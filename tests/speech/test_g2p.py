@@ -35,6 +35,18 @@ def test_number_to_words(token, words):
     assert " ".join(number_to_words(token)) == words
 
 
+@pytest.mark.parametrize("text,words", [
+    ("1st", "first"), ("2nd", "second"), ("3rd", "third"), ("12th", "twelfth"), ("21st", "twenty first"),
+    ("40th", "fortieth"), ("100th", "one hundredth"), ("1,000th", "one thousandth"),
+    ("$3.50", "three dollars fifty cents"), ("$1", "one dollar"), ("$0.99", "ninety nine cents"),
+    ("$1.01", "one dollar one cent"), ("£2.5", "two pounds fifty pence"), ("€ 5", "five euros"),
+    ("$1,500", "one thousand five hundred dollars"), ("$3.505", "three point five zero five dollars"),
+    ("On May 1st it cost $3.50.", "On May first it cost three dollars fifty cents"),
+])
+def test_ordinals_and_money_are_read_as_words(text, words):
+    assert " ".join(text_to_utterance(text, warn=True).words["word"]) == words
+
+
 def test_seed_utterance():
     seg = text_to_segments("one five zero zero six")
     assert phones(seg) == "_ w ah n f ay v z ih r ow z ih r ow s ih k s _".split()

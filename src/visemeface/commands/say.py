@@ -27,8 +27,8 @@ def register(subparsers) -> None:
     p = subparsers.add_parser(
         "say",
         help="animate English text (words -> phonemes -> video)",
-        description="Turn English text into phonemes (CMU dictionary, numbers spelled out, a letter-to-sound "
-        "fallback for unknown words), time them (--rate, or aligned to a recording of them, --audio) and "
+        description="Turn English text into phonemes (CMU dictionary, numbers, ordinals and money spelled out, "
+        "a letter-to-sound fallback for unknown words), time them (--rate, or aligned to a recording of them, --audio) and "
         "animate the face. Takes every option of `visemeface speak` after the transcript.",
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("text", metavar="TEXT", help="what to say (quote it)")

@@ -60,7 +60,8 @@ from visemeface.postures.phonemes import DECTALK, SILENCE, is_vowel, to_dectalk
 from visemeface.resources import data_path
 
 __all__ = ["DEFAULT_RATE_WPM", "arpabet_to_dectalk", "cmu_pronunciations", "durations", "inherent_duration",
-           "letter_to_sound", "number_to_words", "punctuation_pause", "text_to_segments", "text_to_utterance", "timing", "word_to_arpabet"]
+           "letter_to_sound", "money_to_words", "number_to_words", "ordinal_to_words", "punctuation_pause",
+           "text_to_segments", "text_to_utterance", "timing", "word_to_arpabet"]
 
 
 def _read(name: str) -> list[dict[str, str]]:
@@ -125,7 +126,7 @@ def cmu_pronunciations(words) -> dict[str, list[list[str]]]:
     return found
 
 
-from visemeface.speech.numbers import number_to_words  # noqa: E402  (re-exported)
+from visemeface.speech.numbers import money_to_words, number_to_words, ordinal_to_words  # noqa: E402  (re-exported)
 
 
 # ----------------------------------------------------------------------------- words
@@ -248,7 +249,9 @@ _TAG_BODY = re.compile(r"^\s*([A-Za-z_][A-Za-z_\-]*)\s*(?:[=:\s]\s*([-+]?(?:\d+\
 #: those CMUdict reads otherwise (Dr. as drive, St. as street, Prof. not at all); Mr., Mrs., Ms. as it has them.
 TITLES = {"dr": "doctor", "prof": "professor", "st": "saint"}
 _TOKEN = re.compile(r"""
-    (?P<number>[-−]?(?:\d{1,3}(?:,\d{3})+|\d+)(?:\.\d+)?%?)
+    (?P<money>[$£€]\s?(?:\d{1,3}(?:,\d{3})+|\d+)(?:\.\d+)?)
+  | (?P<ordinal>(?:\d{1,3}(?:,\d{3})+|\d+)(?:(?<=1)st|(?<=2)nd|(?<=3)rd|th)\b)
+  | (?P<number>[-−]?(?:\d{1,3}(?:,\d{3})+|\d+)(?:\.\d+)?%?)
   | (?P<title>\b(?i:Dr|Mr|Mrs|Ms|Prof|St)\.(?=\s*[A-Z]))
   | (?P<and>&)
   | (?P<word>[A-Za-z\u00C0-\u024F]+(?:['’][A-Za-z]+)*)
@@ -256,6 +259,10 @@ _TOKEN = re.compile(r"""
   | (?P<clause>[;:])
   | (?P<comma>[,\u2013\u2014]|\s-\s|--)
 """, re.VERBOSE)
+
+
+#: Tokens read as words: numbers, ordinals (21st), amounts of money ($3.50).
+_SPELLED = {"number": number_to_words, "ordinal": ordinal_to_words, "money": money_to_words}
 
 
 def _line_of(text: str, pos: int) -> int:
@@ -288,8 +295,8 @@ def _plain_tokens(text: str, start: int, end: int):
     for m in _TOKEN.finditer(text, start, end):
         line = _line_of(text, m.start())
         kind = m.lastgroup
-        if kind == "number":
-            for w in number_to_words(m.group(0)):
+        if kind in _SPELLED:
+            for w in _SPELLED[kind](m.group(0)):
                 yield "word", w, line
         elif kind == "word":
             yield "word", m.group(0).replace("’", "'"), line

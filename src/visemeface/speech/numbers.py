@@ -73,3 +73,56 @@ def number_to_words(token: str) -> list[str]:
     if percent:
         words.append("percent")
     return words
+
+
+#: Ordinals whose word is not the cardinal + "th".
+_ORDINAL = {"one": "first", "two": "second", "three": "third", "five": "fifth", "eight": "eighth",
+            "nine": "ninth", "twelve": "twelfth"}
+
+
+def ordinal_to_words(token: str) -> list[str]:
+    """Spell an ordinal such as ``"21st"`` or ``"1,000th"``: the cardinal with its last word made ordinal.
+
+    >>> ordinal_to_words("21st")
+    ['twenty', 'first']
+    >>> ordinal_to_words("40th")
+    ['fortieth']
+    """
+    digits = token.strip().rstrip("stndrhSTNDRH")
+    if not digits.replace(",", "").isdigit():
+        raise ValueError(f"not an ordinal: {token!r}")
+    words = number_to_words(str(int(digits.replace(",", ""))))
+    last = words[-1]
+    words[-1] = _ORDINAL.get(last) or (last[:-1] + "ieth" if last.endswith("y") else last + "th")
+    return words
+
+
+#: Currency signs read after the amount: (one unit, units, one hundredth, hundredths).
+CURRENCIES = {"$": ("dollar", "dollars", "cent", "cents"), "£": ("pound", "pounds", "penny", "pence"),
+              "€": ("euro", "euros", "cent", "cents")}
+
+
+def money_to_words(token: str) -> list[str]:
+    """Spell an amount of money as it is read aloud: ``"$3.50"`` -> three dollars fifty cents.
+
+    The sign (``$``, ``£``, ``€``) comes first; one or two decimals are the hundredths (``"$0.5"``:
+    fifty cents); more decimals are read as a decimal number before the plural unit.
+
+    >>> money_to_words("$1.05")
+    ['one', 'dollar', 'five', 'cents']
+    >>> money_to_words("£2")
+    ['two', 'pounds']
+    """
+    text = token.strip()
+    if not text or text[0] not in CURRENCIES:
+        raise ValueError(f"not an amount of money: {token!r}")
+    one, many, cent, cents = CURRENCIES[text[0]]
+    whole, _, frac = text[1:].strip().partition(".")
+    if len(frac) > 2:
+        return number_to_words(text[1:].strip()) + [many]
+    units = int(whole.replace(",", "") or 0)
+    hundredths = int(frac.ljust(2, "0")) if frac else 0
+    words = number_to_words(whole) + [one if units == 1 else many] if units or not hundredths else []
+    if hundredths:
+        words += number_to_words(str(hundredths)) + [cent if hundredths == 1 else cents]
+    return words
