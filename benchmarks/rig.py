@@ -8,6 +8,7 @@ never the bottleneck of rendering. Run::
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import time
@@ -27,6 +28,7 @@ def rate(fn, n: int) -> float:
 
 
 def main() -> None:
+    argparse.ArgumentParser(description=__doc__.split("\n\n")[0]).parse_args()
     from visemeface.face.procedural import default_face
     from visemeface.muscles.rig import MuscleRig
 

@@ -31,6 +31,7 @@ from __future__ import annotations
 import argparse
 import json
 import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
@@ -214,7 +215,7 @@ def print_release_summary(rows: dict[str, list[dict]]) -> None:
     print(json.dumps({"releases_summary": out, "min_frames_open": RELEASE_RUN}), flush=True)
 
 
-def main() -> None:
+def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--realdata", type=Path, default=ROOT.parent / "shared" / "realdata")
     ap.add_argument("--timing", choices=("align", "grid"), default="align",
@@ -235,12 +236,17 @@ def main() -> None:
     from visemeface.analysis.profiles import correlation, l2_distance, plot_profiles, shifted_profile, \
         write_profile
 
+    videos = sorted(args.realdata.glob("*.mpg"))
+    if not videos:
+        print(f"compare_realdata: no GRID clip (*.mpg) in {args.realdata} (--realdata: the folder of "
+              "../shared/realdata/README.md)", file=sys.stderr)
+        return 2
     warnings.simplefilter("ignore")
     detector = OpeningDetector()
     if args.out:
         args.out.mkdir(parents=True, exist_ok=True)
     rows, releases = [], {"real": [], "ours": []}
-    for video in sorted(args.realdata.glob("*.mpg")):
+    for video in videos:
         clip = video.stem
         text = grid_sentence(clip)
         real, fps, n = real_profile(video, detector)
@@ -274,7 +280,8 @@ def main() -> None:
         print_phone_table(rows)
     if args.releases:
         print_release_summary(releases)
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -136,6 +136,11 @@ def main(argv=None) -> int:
                     "model, the speech commands' sticky lips (12 frames each)")
     args = ap.parse_args(argv)
     args.output = args.output or Path("docs/images/realdata_releases.png" if args.releases else "docs/images/realdata.png")
+    missing = [f"{name}.mpg" for name, *_ in CLIPS if not (args.realdata / f"{name}.mpg").is_file()]
+    if missing:
+        print(f"realdata_sheet: {', '.join(missing)} not in {args.realdata} (--realdata: the folder of "
+              "../shared/realdata/README.md)", file=sys.stderr)
+        return 2
     args.output.parent.mkdir(parents=True, exist_ok=True)
     try:
         check_new(args.output, args.force)            # before minutes of rendering, not after
