@@ -79,9 +79,9 @@ def main(argv: list[str] | None = None) -> int:
     except UsageError as exc:
         print(f"visemeface: error: {exc}", file=sys.stderr)
         return 2
-    if not getattr(args, "func", None):
-        parser.print_help()
-        return 0
+    if not getattr(args, "func", None):             # no command: a usage error (the help on stderr)
+        parser.print_help(sys.stderr)
+        return 2
     warnings.showwarning = _show_warning
     from visemeface.runtime import configure
 

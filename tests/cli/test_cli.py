@@ -19,6 +19,8 @@ def test_help_lists_commands(capsys):
         main(["--help"])
     out = capsys.readouterr().out
     assert "usage: visemeface" in out
+    assert main([]) == 2                          # no command: a usage error, the help on stderr
+    assert "usage: visemeface" in capsys.readouterr().err
 
 
 @pytest.mark.slow

@@ -169,3 +169,14 @@ def test_only_the_timed_phones(tmp_path, monkeypatch, capsys):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["t.lab"]
     assert main(["say", "bob", "--no-video"]) == 2
     assert "nothing to write" in capsys.readouterr().err
+
+
+def test_quiet_writes_its_output_and_prints_nothing(tmp_path, monkeypatch, capsys):
+    from visemeface.cli import main
+    monkeypatch.chdir(tmp_path)
+    for argv, out in ((["face", "-o", "f.png", "--size", "64"], "f.png"),
+                      (["pose", "aa", "-o", "p.png", "--size", "64"], "p.png"),
+                      (["sheet", "--emotions", "--size", "16", "-o", "s.png"], "s.png"),
+                      (["analyze", "s.png", "-o", "s.csv"], "s.csv")):
+        assert main([*argv, "-q"]) == 0, capsys.readouterr().err
+        assert (tmp_path / out).is_file() and capsys.readouterr().out == "", argv

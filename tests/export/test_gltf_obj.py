@@ -87,6 +87,12 @@ def test_preview_command(exported, tmp_path, capsys):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["p.html"]
 
 
+def test_preview_of_a_still_mesh_says_so(tmp_path, capsys):
+    assert main(["face", "--export", str(tmp_path / "head.glb"), "-q"]) == 0
+    assert main(["preview", str(tmp_path / "head.glb"), "-o", str(tmp_path / "head.html")]) == 0
+    assert "a still mesh: the glb has no animation" in capsys.readouterr().out
+
+
 def test_preview_without_a_path_goes_beside_the_video(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "s.txt").write_text("hi\n")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from visemeface.commands import _options as opt
+
 ORDER = 80
 
 #: Overlay frames of a small mouth are enlarged (nearest neighbour, whole pixels) to at least this many
@@ -101,6 +103,7 @@ def register(subparsers) -> None:
     p.add_argument("--plot", metavar="PNG", help="also plot the profile over time (.png, .pdf or .svg)")
     p.add_argument("--overlay", metavar="DIR", help="write every frame's mouth region with the detected outlines")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
+    opt.add_quiet(p)
     p.set_defaults(func=run)
 
 
@@ -189,7 +192,7 @@ def run(args) -> int:
                 if not cv2.imwrite(str(overlay_dir / frame_name(i)), cv2.cvtColor(img, cv2.COLOR_RGB2BGR)):
                     raise InputError("cannot write overlay frame", overlay_dir)
 
-        df, boxes = analyze_source(source, box, detector, on_frame, show_progress=True)
+        df, boxes = analyze_source(source, box, detector, on_frame, show_progress=not args.quiet)
     write_profile(df, args.output, args.force)
     if args.plot:
         plot_profiles({Path(args.input).name: df}, args.plot, title=f"mouth openings: {Path(args.input).name}",
@@ -219,6 +222,7 @@ def run(args) -> int:
     if n > 1 and jump.max() > 0:
         k = int(jump.idxmax())
         msg += f"; largest width jump {df['d_width'][k]:+.3f} w at frame {int(df['frame'][k])} ({df['time'][k]:.3f} s)"
-    print(msg)
-    print(f"wrote {args.output}" + "".join(f", {p}" for p in (args.plot, args.overlay) if p))
+    if not args.quiet:
+        print(msg)
+        print(f"wrote {args.output}" + "".join(f", {p}" for p in (args.plot, args.overlay) if p))
     return 0

@@ -80,7 +80,7 @@ def register(subparsers) -> None:
                    help=f"sinks to write, separated by spaces or ';' (default video; from {', '.join(SINKS)})")
     d.add_argument("--emotion", action="append", metavar="NAME[=W]", help="emotion over each clip (repeatable)")
     d.add_argument("--physics", choices=("none",) + tuple(PHYSICS), default="none",
-                   help="none: the kinematic rig; sticky/elastic: the FEM face (tens of seconds per clip second)")
+                   help="none: the kinematic rig; sticky/elastic: the FEM face (about 8 s per clip second)")
     d.add_argument("--fps", type=float, default=30.0, help="frame rate (default 30)")
     d.add_argument("--size", type=int, default=512, help="frame width = height in pixels, a multiple of 16 "
                    "(default 512)")

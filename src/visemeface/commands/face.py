@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from visemeface.commands import _options as opt
+
 ORDER = 10
 
 
@@ -38,6 +40,7 @@ def register(subparsers) -> None:
     p.add_argument("--camera-json", metavar="FILE",
                    help="also write the camera and the rest mouth box in pixels (the analysis sidecar format)")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
+    opt.add_quiet(p)
     p.set_defaults(func=run)
 
 
@@ -75,19 +78,20 @@ def run(args) -> int:
         from visemeface.face.procedural import default_face
         face = default_face(args.resolution, rest_gap=args.rest_gap)
 
+    say = (lambda *a: None) if args.quiet else print
     if args.export:
         mesh_path, side = face.save(args.export, force=args.force)
-        print(f"wrote {mesh_path} ({face.n_vertices} vertices, {len(face.quads)} quads, "
+        say(f"wrote {mesh_path} ({face.n_vertices} vertices, {len(face.quads)} quads, "
               f"{len(face.tris)} triangles) and {side}")
     if args.output or args.camera_json:
         from visemeface.render.renderer import Renderer, save_png
         with Renderer(face, size=size, view=args.view, projection=args.projection) as renderer:
             if args.output:
                 save_png(args.output, renderer.render(), force=args.force)
-                print(f"wrote {args.output} ({size[0]}x{size[1]}, view {args.view}, {args.projection})")
+                say(f"wrote {args.output} ({size[0]}x{size[1]}, view {args.view}, {args.projection})")
             if args.camera_json:
                 info = renderer.camera_info()
                 with atomic_output(args.camera_json, args.force) as tmp:
                     tmp.write_text(json.dumps(info, indent=1) + "\n", encoding="utf-8")
-                print(f"wrote {args.camera_json}")
+                say(f"wrote {args.camera_json}")
     return 0

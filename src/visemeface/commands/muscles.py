@@ -12,9 +12,10 @@ def register(subparsers) -> None:
         "muscles",
         help="list the rig's functions: 25 face muscles, tongue, lip-shaping and lid functions, the jaw",
         description="List the functions of the Waters muscle rig: name (use it with "
-        "`visemeface pose --set NAME=VALUE`), kind (linear, sphincter, rotation), side, activation "
-        "range (values outside are clamped) and lip side (upper-lip muscles move nothing below the "
-        "lip seam, lower-lip muscles nothing above it, both: not trimmed).",
+        "`visemeface pose --set NAME=VALUE`), kind (linear and sphincter: Waters's; local: a Gaussian push; "
+        "turn: gaze; rotation: the jaw), side, activation range (values outside are clamped) and lip side "
+        "(upper-lip muscles move nothing below the lip seam, lower-lip muscles nothing above it, both: not "
+        "trimmed).",
         formatter_class=argparse.RawDescriptionHelpFormatter,
         epilog="examples:\n  visemeface muscles\n  visemeface muscles --csv > muscles.csv",
     )

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from visemeface.commands import _options as opt
+
 ORDER = 20
 
 
@@ -41,6 +43,7 @@ def register(subparsers) -> None:
                    "orange lower lip, green untrimmed) and the zones of the active muscles")
     p.add_argument("-o", "--output", required=True, metavar="PNG", help="output image")
     p.add_argument("--force", action="store_true", help="overwrite the output if it exists")
+    opt.add_quiet(p)
     p.set_defaults(func=run)
 
 
@@ -110,6 +113,8 @@ def run(args) -> int:
             if active:
                 image = draw_muscles(image, renderer, rig, active, zones=True)
     save_png(args.output, image, force=args.force)
+    if args.quiet:
+        return 0
     active = ", ".join(f"{n}={v:g}" for n, v in zip(rig.names, a) if v != 0) or "rest"
     print(f"pose: {active}")
     dims = lip_dimensions(rig.face, vertices)

@@ -57,5 +57,6 @@ def run(args) -> int:
         check_audio(args.audio)
     write_preview(out, data, args.audio, title=args.glb.stem, force=args.force)
     if not args.quiet:
-        print(f"{out} ({duration:.2f} s{' with ' + str(args.audio) if args.audio else ''})")
+        what = f"{duration:.2f} s" if duration > 0 else "a still mesh: the glb has no animation"
+        print(f"{out} ({what}{' with ' + str(args.audio) if args.audio else ''})")
     return 0

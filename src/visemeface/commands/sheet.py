@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-ORDER = 43
-
+from visemeface.commands import _options as opt
 from visemeface.render import VIEWS
+
+ORDER = 43
 
 
 def register(subparsers) -> None:
@@ -34,6 +35,7 @@ def register(subparsers) -> None:
                    help="camera: face, mouth or three-quarter (default: mouth for visemes, face for emotions)")
     p.add_argument("--columns", type=int, default=None, help="tiles per row (default 8 for visemes, 4 for emotions)")
     p.add_argument("--force", action="store_true", help="overwrite the output if it exists")
+    opt.add_quiet(p)
     p.set_defaults(func=run)
 
 
@@ -89,6 +91,8 @@ def run(args) -> int:
         raise InputError(f"--columns must be at least 1, got {args.columns}")
     if args.emotions and args.emotion:
         raise InputError("give either --emotions (a sheet of the emotions) or --emotion NAME=W (blend), not both")
+    if args.keep_contact and not args.emotion:
+        raise InputError("--keep-contact keeps p b m f v closed under an --emotion; give one")
     check_new(check_suffix(args.output, ".png"), args.force)
     rig = default_rig()
     mix = parse_emotions(args.emotion, load_expressions(rig=rig).index)
@@ -107,9 +111,10 @@ def run(args) -> int:
     posed_vertices(rig, *poses[-1])
     renderer = Renderer(rig.face, size=(args.size, args.size), view=view)
     images = [renderer.render(posed_vertices(rig, v, e, keep_contact=keep))
-              for v, e in progress(poses, desc="rendering", unit="posture")]
+              for v, e in progress(poses, desc="rendering", unit="posture", show=not args.quiet)]
     sheet = compose_sheet(images, labels, columns)
     with atomic_output(args.output, args.force) as tmp:
         Image.fromarray(sheet).save(tmp, format="PNG", optimize=True)
-    print(f"wrote {args.output} ({len(images)} postures, {sheet.shape[1]}x{sheet.shape[0]})")
+    if not args.quiet:
+        print(f"wrote {args.output} ({len(images)} postures, {sheet.shape[1]}x{sheet.shape[0]})")
     return 0
