@@ -293,6 +293,17 @@ SPEECH = {"bob": "Bob moves five boats", "set_white": "set white with p two soon
 SWAPS: dict[str, str] = {}
 
 
+def posture_swap(text: str) -> tuple[str, str]:
+    """``V=D`` of ``--posture``, both DECtalk symbols of the viseme table."""
+    from visemeface.postures.library import load_visemes
+    known = load_visemes().index
+    v, sep, d = text.partition("=")
+    for s in (v, d):
+        if not sep or s not in known:
+            raise argparse.ArgumentTypeError(f"{text!r}: give V=D, two visemes (e.g. iy=ey)")
+    return v, d
+
+
 def speech_track(rig, which: str, fps: float):
     from visemeface.postures.library import load_visemes
     from visemeface.resources import transcripts_path
@@ -360,7 +371,7 @@ def main():
     ap.add_argument("--ramp", type=float, default=0.0,
                     help="zipper/glue03: seconds the jaw takes to open (0: seed scenario open-once)")
     ap.add_argument("--posture-hz", type=float, default=0.0, help="uniform posture spring (Hz, 0 = none)")
-    ap.add_argument("--posture", action="append", default=[], metavar="V=D",
+    ap.add_argument("--posture", action="append", default=[], metavar="V=D", type=posture_swap,
                     help="speech: viseme V takes viseme D's muscle vector (a cause experiment), repeatable")
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--dt", type=float, default=None,
@@ -383,7 +394,7 @@ def main():
     common["saliva"] = SalivaParams(soften=args.soften, viscosity=args.viscosity, strand=args.strand, **extra)
     global RAMP, IMAGE, MERGE_IMAGE
     RAMP, IMAGE, MERGE_IMAGE = args.ramp, args.image, args.merge_image
-    SWAPS.update(dict(p.split("=", 1) for p in args.posture))
+    SWAPS.update(dict(args.posture))
     emit(figure="settings", resolution=args.resolution, seam_elements=k, fps=args.fps, soften=args.soften, viscosity=args.viscosity,
          ramp=args.ramp, postures=SWAPS, rupture_time=common["saliva"].rupture_time, strand=args.strand,
          **{k: v for k, v in common.items() if k != "saliva"})

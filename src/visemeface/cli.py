@@ -79,8 +79,8 @@ def main(argv: list[str] | None = None) -> int:
     except UsageError as exc:
         print(f"visemeface: error: {exc}", file=sys.stderr)
         return 2
-    if not getattr(args, "func", None):             # no command: a usage error (the help on stderr)
-        parser.print_help(sys.stderr)
+    if not getattr(args, "func", None):
+        print("visemeface: error: name a command (`visemeface --help` lists them)", file=sys.stderr)
         return 2
     warnings.showwarning = _show_warning
     from visemeface.runtime import configure

@@ -39,7 +39,8 @@ def test_each_bad_row_is_one_line_naming_the_line_and_the_reason(tmp_path):
                      "out,t.txt,,,mp5,\n"
                      "size,t.txt,,,,100\n"
                      "both,t.txt,hello,,,\n"
-                     "batch_report.csv,t.txt,,,,\n")
+                     "batch_report.csv,t.txt,,,,\n"
+                     "measured,t.txt,,,measures,\n")
     rows = read_manifest(path)
     assert isinstance(rows[0], Job)
     bad = {r.clip: r.error for r in rows[1:]}
@@ -54,6 +55,7 @@ def test_each_bad_row_is_one_line_naming_the_line_and_the_reason(tmp_path):
     assert "size must be a positive multiple of 16" in bad["size"]
     assert "one of them" in bad["both"]
     assert "name of the batch's report" in bad["batch_report.csv"]
+    assert "measures writes a simulation's figures: it needs physics sticky" in bad["measured"]
 
 
 @pytest.mark.parametrize("text,message", [

@@ -89,7 +89,8 @@ def test_lips_refined_along_the_seam_unzip_the_default_face_from_the_centre():
     opening sticky lips stay joined toward the corners; measured 0.71 of the mouth against elastic's
     0.95); opened on to 0.6 the lips let go there too and end where the elastic lips do. These are the
     speech commands' lips (:meth:`PhysicsSettings.speech`). The centre's height rises slowly, then
-    fast, as seed 001 Fig. 19's sticky and real mouths; the elastic one fast, then tapering."""
+    fast, as seed 001 Fig. 19's sticky and real mouths in its opening action (GRID's speakers in running
+    speech taper: ``tests/analysis/test_realdata.py``); the elastic one fast, then tapering."""
     from visemeface.face.procedural import default_face
     from visemeface.physics.scenarios import make_track, smoothstep_keyframes
     from visemeface.runtime import set_threads

@@ -148,16 +148,21 @@ def test_lipsync_takes_the_words_of_a_text_beside_the_recording(vowels_wav, tmp_
     assert main(["lipsync", "take.wav", "--text", "ah", "--text-file", "take.txt", "-o", "x.lab"]) == 2
     assert main(["lipsync", "take.wav", "-o", "take.json"]) == 2                 # exists: --force
     assert "--force" in capsys.readouterr().err
-    # the words read are an input: no output replaces them, --force or not (the next alignment would fail)
+    # a recording's words are an input: no output replaces them, --force or not (the next alignment would
+    # fail), nor writes the .txt beside a recording, which the next run would read as its words
     (tmp_path / "words.txt").write_text("ah ee\n")
+    shutil.copy(vowels_wav, "other.wav")
     for argv in (["lipsync", "take.wav", "-o", "take.txt", "--force"],
+                 ["lipsync", "take.wav", "--text", "ah ee", "-o", "take.txt", "--force"],
                  ["lipsync", "take.wav", "--text-file", "words.txt", "-o", "words.txt", "--force"],
+                 ["lipsync", "other.wav", "--text", "ah ee", "-o", "other.txt"],
                  ["speak", "take.wav", "--no-video", "--save-transcript", "take.txt", "--force"],
                  ["speak", "take.wav", "--text-file", "words.txt", "--no-video", "--save-transcript",
                   "words.txt", "--force"]):
         assert main(argv) == 2, argv
-        assert "overwrite an input" in capsys.readouterr().err
+        assert "would overwrite the words of" in capsys.readouterr().err
     assert (tmp_path / "take.txt").read_text() == "ah ee\n" == (tmp_path / "words.txt").read_text()
+    assert not (tmp_path / "other.txt").exists()
 
 
 @pytest.mark.realdata

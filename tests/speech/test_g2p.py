@@ -42,6 +42,8 @@ def test_number_to_words(token, words):
     ("$1.01", "one dollar one cent"), ("£2.5", "two pounds fifty pence"), ("€ 5", "five euros"),
     ("$1,500", "one thousand five hundred dollars"), ("$3.505", "three point five zero five dollars"),
     ("On May 1st it cost $3.50.", "On May first it cost three dollars fifty cents"),
+    ("$5 million", "five million dollars"), ("$.50", "fifty cents"), ("the 21ST century", "the twenty first century"),
+    ("5th-6th", "fifth sixth"), ("pages 3-4", "pages three four"), ("-3 degrees", "minus three degrees"),
 ])
 def test_ordinals_and_money_are_read_as_words(text, words):
     assert " ".join(text_to_utterance(text, warn=True).words["word"]) == words

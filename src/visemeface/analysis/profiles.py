@@ -318,7 +318,7 @@ def rise_exponent(height) -> float:
     first is :math:`t = 1`. The fit (least squares of :math:`\\log h` over :math:`\\log t`) runs up
     to the first frame at :data:`RISE_TOP` of the highest, over the frames with :math:`h > 0`.
     Seed 001, Fig. 19: :math:`p < 1` opens fast and tapers, :math:`p > 1` opens slowly, then faster.
-    NaN with fewer than 3 such frames.
+    NaN with fewer than 3 such frames, or with a NaN height anywhere in ``height``.
     """
     h = np.asarray(height, dtype=float)
     if not h.size or not np.isfinite(h).all() or h.max() <= 0:

@@ -170,6 +170,9 @@ def check_settings(s: dict, base: Path = Path(".")) -> dict:
     else:
         out["rate"] = None
     out["outputs"] = _outputs(s.get("outputs"))
+    from visemeface.export.sinks import check_physics_outputs
+
+    check_physics_outputs(out["outputs"], out["physics"], option="")
     return out
 
 

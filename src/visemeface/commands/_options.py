@@ -78,9 +78,9 @@ def add_output_arguments(p: argparse.ArgumentParser, video_default: str, resumab
     assert "video" in SINKS
 
 
-def add_quiet(p) -> None:
-    """``-q``/``--quiet``: no progress bar or summary (errors still print)."""
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+def add_quiet(p, what: str = "no progress bar or summary") -> None:
+    """``-q``/``--quiet`` (errors still print); ``what`` is its help."""
+    p.add_argument("-q", "--quiet", action="store_true", help=what)
 
 
 def sinks_from_args(args, default_video: Path, defaults: dict | None = None) -> list:
@@ -141,7 +141,7 @@ MAX_SEAM_ELEMENTS = 192
 
 
 #: Options of the glue alone: the elastic face is the sticky one with no glue (``--physics elastic`` refuses them).
-GLUE_OPTIONS = ("glue", "glue_profile", "moisture", "evaporation", "critical_moisture")
+GLUE_OPTIONS = ("glue", "glue_profile", "glue_file", "moisture", "evaporation", "critical_moisture")
 
 
 def physics_from_args(args, **more):
@@ -254,13 +254,23 @@ def add_text_arguments(g) -> None:
 
 def words_path(recording: Path, text, text_file) -> Path | None:
     """The file the words of ``recording`` are read from (``--text-file``, else a same-named .txt
-    beside it), or None (``--text``, or no such file): an input no output may overwrite."""
+    beside it), or None (``--text``, or no such file)."""
     if text is not None:
         return None
     if text_file is not None:
         return Path(text_file)
     beside = recording.with_suffix(".txt")
     return beside if beside.is_file() else None
+
+
+def check_not_words(targets, recording: Path, text_file) -> None:
+    """Refuse an output that is the words file of ``recording``: ``--text-file``, or the same-named .txt
+    beside it, which a later run reads as its words, whether it exists yet or not (and whatever --force)."""
+    from visemeface.outputs import check_not_inputs
+
+    words = [Path(text_file)] if text_file is not None else []
+    check_not_inputs(targets, words + [recording.with_suffix(".txt")],
+                     f"the words of {recording.name} (a .txt beside a recording is read as its words)")
 
 
 def text_of(recording: Path, text, text_file, quiet: bool = False):

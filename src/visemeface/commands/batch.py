@@ -74,7 +74,7 @@ def register(subparsers) -> None:
                      "scheduler file (JSON) instead of a local cluster")
     run.add_argument("--resume", action="store_true", help="skip the clips already made with the same settings")
     run.add_argument("--force", action="store_true", help="remake clips that exist")
-    run.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+    opt.add_quiet(run)
     d = p.add_argument_group("defaults for empty manifest cells")
     d.add_argument("--outputs", default="video", metavar="NAMES",
                    help=f"sinks to write, separated by spaces or ';' (default video; from {', '.join(SINKS)})")

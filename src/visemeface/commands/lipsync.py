@@ -42,7 +42,7 @@ def register(subparsers) -> None:
                    help="transcript to write: .txt, .lab, .TextGrid or .json (default RECORDING's stem + "
                    ".TextGrid in the current folder)")
     p.add_argument("--force", action="store_true", help="overwrite the output")
-    p.add_argument("-q", "--quiet", action="store_true", help="no summary")
+    opt.add_quiet(p, "no summary")
     p.set_defaults(func=run)
 
 
@@ -55,8 +55,8 @@ def run(args) -> int:
         raise InputError("recording not found", args.recording)
     out = args.output if args.output is not None else Path.cwd() / (args.recording.stem + ".TextGrid")
     format_of(out)
-    words = opt.words_path(args.recording, args.text, args.text_file)
-    check_not_inputs([out], [args.recording, *([words] if words else [])])
+    check_not_inputs([out], [args.recording])
+    opt.check_not_words([out], args.recording, args.text_file)
     check_new(out, args.force)
     utterance = opt.recording_utterance(args.recording, args.text, args.text_file, args.quiet)
     write_transcript(utterance, out, force=args.force)

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from visemeface.commands import _options as opt
+
 ORDER = 22
 
 EPILOG = """\
@@ -31,7 +33,7 @@ def register(subparsers) -> None:
     p.add_argument("-o", "--output", type=Path, metavar="FILE.html",
                    help="page to write (default: the glb's stem + .html in the current folder)")
     p.add_argument("--force", action="store_true", help="overwrite the output if it exists")
-    p.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    opt.add_quiet(p, "print nothing on success")
     p.set_defaults(func=run)
 
 

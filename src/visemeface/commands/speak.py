@@ -67,6 +67,7 @@ def check_early(args, default_video: Path, inputs=()):
     refuses an output that is one of ``inputs`` (paths) or another output.
     """
     from visemeface.errors import InputError
+    from visemeface.export.sinks import check_physics_outputs
     from visemeface.outputs import check_not_inputs
     from visemeface.pipeline import check_audio
 
@@ -82,10 +83,7 @@ def check_early(args, default_video: Path, inputs=()):
     if saved is not None and Path(saved.path).resolve() in {Path(t).resolve() for t in targets}:
         raise InputError("--save-transcript and another output are the same path", saved.path)
     physics = opt.physics_from_args(args)
-    if physics is None:
-        for s in sinks:
-            if s.needs_physics:
-                raise InputError(f"--{s.name} writes a simulation's figures: it needs --physics sticky or elastic")
+    check_physics_outputs([s.name for s in sinks], physics)
     return sinks, render, physics, saved
 
 
@@ -192,9 +190,11 @@ def run(args) -> int:
 
     if not args.transcript.is_file():
         raise InputError("transcript not found", args.transcript)
-    words = opt.words_path(args.transcript, args.text, args.text_file) if is_recording(args.transcript) else None
     sinks, render, physics, saved = check_early(args, Path.cwd() / (args.transcript.stem + ".mp4"),
-                                                inputs=[args.transcript, *([words] if words else [])])
+                                                inputs=[args.transcript])
+    if is_recording(args.transcript):
+        opt.check_not_words([t for s in sinks for t in s.targets()] + ([saved.path] if saved else []),
+                            args.transcript, args.text_file)
     utterance, recording = _read_input(args)
     with tempfile.TemporaryDirectory(prefix="visemeface-") as folder:
         sound = None if recording is None else media_wav(recording, folder)

@@ -138,6 +138,16 @@ class Sink:
             s.abort()
 
 
+def check_physics_outputs(names, physics, option: str = "--") -> None:
+    """Refuse a sink whose output is a simulation's own figures (``needs_physics``) when ``physics`` is
+    None or "none": it would hold nothing. ``option`` prefixes the names in the message."""
+    if physics in (None, "none"):
+        for name in names:
+            if SINKS[name].needs_physics:
+                raise InputError(f"{option}{name} writes a simulation's figures: it needs {option}physics "
+                                 "sticky or elastic")
+
+
 def register(cls: type[Sink]) -> type[Sink]:
     """Class decorator: add a sink to :data:`SINKS` under ``cls.name``."""
     if not cls.name or cls.name in SINKS:

@@ -249,9 +249,9 @@ _TAG_BODY = re.compile(r"^\s*([A-Za-z_][A-Za-z_\-]*)\s*(?:[=:\s]\s*([-+]?(?:\d+\
 #: those CMUdict reads otherwise (Dr. as drive, St. as street, Prof. not at all); Mr., Mrs., Ms. as it has them.
 TITLES = {"dr": "doctor", "prof": "professor", "st": "saint"}
 _TOKEN = re.compile(r"""
-    (?P<money>[$£€]\s?(?:\d{1,3}(?:,\d{3})+|\d+)(?:\.\d+)?)
-  | (?P<ordinal>(?:\d{1,3}(?:,\d{3})+|\d+)(?:(?<=1)st|(?<=2)nd|(?<=3)rd|th)\b)
-  | (?P<number>[-−]?(?:\d{1,3}(?:,\d{3})+|\d+)(?:\.\d+)?%?)
+    (?P<money>[$£€]\s?(?:(?:\d{1,3}(?:,\d{3})+|\d+)(?:\.\d+)?|\.\d+)(?:\s+(?i:thousand|million|billion|trillion)\b)?)
+  | (?P<ordinal>(?:\d{1,3}(?:,\d{3})+|\d+)(?i:(?<=1)(?<!11)st|(?<=2)(?<!12)nd|(?<=3)(?<!13)rd|th)\b)
+  | (?P<number>(?:(?<![\w.])[-−])?(?:\d{1,3}(?:,\d{3})+|\d+)(?:\.\d+)?%?)
   | (?P<title>\b(?i:Dr|Mr|Mrs|Ms|Prof|St)\.(?=\s*[A-Z]))
   | (?P<and>&)
   | (?P<word>[A-Za-z\u00C0-\u024F]+(?:['’][A-Za-z]+)*)

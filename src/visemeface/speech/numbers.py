@@ -105,21 +105,23 @@ CURRENCIES = {"$": ("dollar", "dollars", "cent", "cents"), "£": ("pound", "poun
 def money_to_words(token: str) -> list[str]:
     """Spell an amount of money as it is read aloud: ``"$3.50"`` -> three dollars fifty cents.
 
-    The sign (``$``, ``£``, ``€``) comes first; one or two decimals are the hundredths (``"$0.5"``:
-    fifty cents); more decimals are read as a decimal number before the plural unit.
+    The sign (``$``, ``£``, ``€``) comes first; one or two decimals are the hundredths (``"$0.5"``,
+    ``"$.5"``: fifty cents); more decimals, or a scale word after the amount (``"$1.5 million"``), are
+    read as a number before the plural unit.
 
     >>> money_to_words("$1.05")
     ['one', 'dollar', 'five', 'cents']
-    >>> money_to_words("£2")
-    ['two', 'pounds']
+    >>> money_to_words("$5 million")
+    ['five', 'million', 'dollars']
     """
     text = token.strip()
     if not text or text[0] not in CURRENCIES:
         raise ValueError(f"not an amount of money: {token!r}")
     one, many, cent, cents = CURRENCIES[text[0]]
-    whole, _, frac = text[1:].strip().partition(".")
-    if len(frac) > 2:
-        return number_to_words(text[1:].strip()) + [many]
+    amount, *scale = text[1:].split()
+    whole, _, frac = amount.partition(".")
+    if len(frac) > 2 or scale:
+        return number_to_words(amount) + [w.lower() for w in scale] + [many]
     units = int(whole.replace(",", "") or 0)
     hundredths = int(frac.ljust(2, "0")) if frac else 0
     words = number_to_words(whole) + [one if units == 1 else many] if units or not hundredths else []
