@@ -119,7 +119,7 @@ def _kinematic(work, command, tag, *more):
     head = [a.format(transcript=transcripts_path("bob_moves_five_boats_long.TextGrid"),
                      recording=transcripts_path("set_white_with_p_two_soon.wav")) for a in KINEMATIC[command]]
     argv = [sys.executable, "-m", "visemeface", *head, "--fps", "120", "--size", "64", "--msaa", "0", "-q",
-            "-o", f"{tag}.mp4", "--frames", f"{tag}_fr", "--pc2", f"{tag}.pc2", "--measures", f"{tag}.csv", *more]
+            "-o", f"{tag}.mp4", "--frames", f"{tag}_fr", "--pc2", f"{tag}.pc2", "--track", f"{tag}.csv", *more]
     return subprocess.Popen(argv, cwd=work, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
@@ -131,7 +131,7 @@ def _files(folder):
 @pytest.mark.parametrize("command", sorted(KINEMATIC))
 def test_speak_and_say_resume_byte_identical_after_any_interruption(tmp_path, command, sig):
     """Interrupted mid-render by Ctrl-C, SIGTERM or a kill, then --resume: the very bytes of an uninterrupted
-    run (video, PNGs, PC2, measures), nothing else left in the folder, and Ctrl-C/SIGTERM end it in < 2 s."""
+    run (video, PNGs, PC2, track), nothing else left in the folder, and Ctrl-C/SIGTERM end it in < 2 s."""
     ref, cut = tmp_path / "ref", tmp_path / "cut"
     ref.mkdir(), cut.mkdir()
     proc = _kinematic(ref, command, "t")
