@@ -95,6 +95,15 @@ def test_lips_method_ignores_the_seam_of_closed_lips():
     assert detect_openings(img, BOX, min_height=0).count == 1
 
 
+def test_lips_method_ignores_a_blob_narrower_than_an_opening():
+    """A blob taller than 0.05 w but narrower (MPEG's chroma at a mouth corner: 3 x 6 px on a 106 px mouth)
+    is no opening; the same blob widened past 0.05 w is one."""
+    narrow = mouth_image(SIZE, BOX, [Ellipse(400, 256, 8, 16)], noise=6.0, seed=5)     # 17 px wide, 33 high
+    assert detect_openings(narrow, BOX).count == 0                                     # under 0.05 w = 20 px
+    assert detect_openings(narrow, BOX, min_height=0).count == 1
+    assert detect_openings(mouth_image(SIZE, BOX, [Ellipse(400, 256, 14, 16)], noise=6.0, seed=5), BOX).count == 1
+
+
 def test_convex_hull_fills_a_notch():
     e = Ellipse(256, 256, 70, 24)
     img = mouth_image(SIZE, BOX, [e], teeth=[Ellipse(256, 232, 20, 12)], seed=4)

@@ -196,7 +196,8 @@ def plausible_openings(opening: np.ndarray, box, min_px: float) -> np.ndarray:
 
     A region is dropped when it is less than ``min_px`` thick (the 90th
     percentile of its column heights: the seam of closed lips is a long thin
-    curve, perhaps with a blob at a corner), touches the border
+    curve, perhaps with a blob at a corner) or less than ``min_px`` wide (a
+    corner's blob of compressed colour, taller than wide), touches the border
     of the analysed region (an opening is surrounded by lips; skin folds at the
     crop's edge are not), or lies wholly below the mouth box ``(x, y, w, h)``
     (skin between the lower lip and a reddish chin).
@@ -204,7 +205,7 @@ def plausible_openings(opening: np.ndarray, box, min_px: float) -> np.ndarray:
     n, labels, stats, _ = cv2.connectedComponentsWithStats(opening, connectivity=8)
     x, y, w, h = (stats[:, i] for i in (cv2.CC_STAT_LEFT, cv2.CC_STAT_TOP, cv2.CC_STAT_WIDTH, cv2.CC_STAT_HEIGHT))
     rows, cols = opening.shape
-    keep = (h >= min_px) & (x > 0) & (y > 0) & (x + w < cols) & (y + h < rows) & (y < box[1] + box[3])
+    keep = (h >= min_px) & (w >= min_px) & (x > 0) & (y > 0) & (x + w < cols) & (y + h < rows) & (y < box[1] + box[3])
     keep[0] = False
     for i in np.flatnonzero(keep):
         cols = (labels[y[i]:y[i] + h[i], x[i]:x[i] + w[i]] == i).sum(axis=0)
