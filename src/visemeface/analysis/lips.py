@@ -133,7 +133,7 @@ def lips_opening_mask(crop: np.ndarray, box_in_crop, mouth_width: int, min_heigh
     mouth_width : int
         Natural mouth width ``w`` (px), which sets the working scale.
     min_height : float
-        Openings thinner than this (fraction of ``w``) are a seam, not an opening.
+        Openings thinner than this (fraction of ``w``) are a seam, narrower a speck, not an opening.
     """
     s = work_scale(mouth_width)
     if s > 1.0:

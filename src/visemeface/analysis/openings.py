@@ -291,7 +291,7 @@ class OpeningDetector:
         between the lips always count). ``"seed"``: seed 001's grey threshold.
     min_height : float
         ``"lips"`` only: an opening thinner than this (fraction of ``w``) is the
-        seam of closed lips.
+        seam of closed lips, one narrower a speck.
     min_chroma : float
         ``"lips"`` only: lips must be at least this much redder (Lab a*, 8-bit
         levels) than the skin, or there is no mouth to measure.

@@ -93,8 +93,8 @@ def register(subparsers) -> None:
                    help="seed method: count bright unsaturated pixels (teeth) touching the opening as opening "
                    "(the lips method always counts teeth between the lips)")
     p.add_argument("--min-height", type=float, default=0.05, metavar="F",
-                   help="lips method: an opening nowhere F * mouth_width thick is the seam of closed lips "
-                   "(default 0.05)")
+                   help="lips method: an opening nowhere F * mouth_width thick is the seam of closed lips, "
+                   "one less than that wide a speck (default 0.05)")
     p.add_argument("--min-area", type=float, default=5e-4, metavar="F",
                    help="drop openings smaller than F * mouth_width^2 pixels (default 5e-4)")
     p.add_argument("--pad", default="0.1,0.1,0.1,0.4", metavar="F|L,T,R,B",
