@@ -82,8 +82,9 @@ def animate(utterance, sinks: list, render=None, *, rig=None, emotions=None, int
     render : RenderSettings, optional
     rig : MuscleRig, optional
         Default: the embedded face's rig.
-    emotions : list of str or dict, optional
-        ``NAME[=W]`` specs (names checked against the rig's expression table) or a checked dict.
+    emotions : list of str or mapping, optional
+        ``NAME[=W]`` specs or ``{name: weight}`` (a dict or a pandas Series); names are checked against
+        the rig's expression table and each weight must be in 0..1.
     interp : str, optional
         Interpolation between visemes (default: coarticulation).
     fps : float
@@ -108,14 +109,16 @@ def animate(utterance, sinks: list, render=None, *, rig=None, emotions=None, int
     from visemeface.postures.library import load_expressions, load_visemes
     from visemeface.speech.timeline import MODES, activation_track
 
+    from visemeface.export.sinks import check_physics_outputs
+
+    check_physics_outputs([s.name for s in sinks], physics, option="")
     if utterance.end > MAX_UTTERANCE_S:
         raise InputError(f"the transcript lasts {utterance.end:.0f} s, over the {MAX_UTTERANCE_S} s limit of one "
                          "run (wrong time units? try --format / --sample-rate)")
     if audio is not None and any(s.name == "video" for s in sinks):
         utterance = _to_the_audio(audio, utterance, fps)
     rig = rig if rig is not None else default_rig()
-    if not isinstance(emotions, dict):
-        emotions = parse_emotions(emotions, load_expressions(rig=rig).index)
+    emotions = parse_emotions(emotions, load_expressions(rig=rig).index)
     ranges = {n: tuple(r) for n, r in zip(rig.names, rig.ranges)}
     track = activation_track(utterance, load_visemes(rig=rig), fps=fps, mode=interp or MODES[0],
                              emotions=emotions or None, ranges=ranges)

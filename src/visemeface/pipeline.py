@@ -51,12 +51,12 @@ class RenderSettings:
     def check(self) -> RenderSettings:
         if not isinstance(self.size, int) or self.size < SIZE_STEP or self.size % SIZE_STEP:
             raise InputError(f"--size must be a positive multiple of {SIZE_STEP}, got {self.size}")
-        if self.size > 8192:
-            raise InputError(f"--size {self.size} is larger than the renderer's 8192 px")
+        from visemeface.render.renderer import MAX_SIZE, VIEWS
+
+        if self.size > MAX_SIZE:
+            raise InputError(f"--size {self.size} is larger than the renderer's {MAX_SIZE} px")
         if self.msaa not in MSAA:
             raise InputError(f"--msaa must be one of {', '.join(map(str, MSAA))}, got {self.msaa}")
-        from visemeface.render.renderer import VIEWS
-
         if self.view not in VIEWS:
             raise InputError(f"--view must be one of {', '.join(VIEWS)}, got {self.view!r}")
         return self

@@ -252,3 +252,10 @@ def test_translation_and_mirror_invariance(method, hull, teeth):
         np.testing.assert_array_equal(other.width, ref.width)
         np.testing.assert_array_equal(other.height, ref.height)
     np.testing.assert_array_equal(shifted.contours[0] - [21, 37], ref.contours[0])
+
+
+@pytest.mark.parametrize("frame", [np.zeros((64, 64, 3)), np.zeros((64, 64), np.uint8), np.zeros((64, 64, 4), np.uint8)])
+def test_a_frame_that_is_not_rgb_uint8_is_refused(frame):
+    """Floats in 0..1 would threshold as black (a shut mouth, silently); grey or RGBA crash in OpenCV."""
+    with pytest.raises(InputError, match="RGB uint8"):
+        OpeningDetector().detect(frame, (8, 24, 48, 16))

@@ -131,3 +131,23 @@ def test_bad_export_options_are_refused_before_work(tmp_path, capsys, monkeypatc
     err = capsys.readouterr().err
     assert message in err and err.count("\n") == 1
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.txt"]
+
+
+def test_library_misuse_is_refused_before_anything_is_written(tmp_path):
+    """From Python as from the command line: a misspelt sink setting, a measures output without physics,
+    an emotion weight past 1 given as a dict, text that is not a str."""
+    from visemeface.animate import animate
+    from visemeface.errors import InputError
+    from visemeface.export import SINKS
+    from visemeface.speech.g2p import text_to_utterance
+
+    with pytest.raises(InputError, match="no setting 'shapes'.*did you mean: gltf_shapes"):
+        SINKS["gltf"](tmp_path / "a.glb", shapes="arkit")
+    utt = text_to_utterance("mama")
+    with pytest.raises(InputError, match="measures writes a simulation's figures"):
+        animate(utt, [SINKS["measures"](tmp_path / "m.csv")])
+    with pytest.raises(InputError, match="not in 0..1"):
+        animate(utt, [SINKS["track"](tmp_path / "t.csv")], emotions={"happiness": 5})
+    with pytest.raises(InputError, match="must be a str"):
+        text_to_utterance(None)
+    assert list(tmp_path.iterdir()) == []

@@ -238,6 +238,11 @@ def test_parse_weights():
     assert lib.parse_weights(["happiness=0.6", "fear"]) == {"happiness": 0.6, "fear": 1.0}
     assert lib.parse_weights("anger=0.2, sadness=0.3") == {"anger": 0.2, "sadness": 0.3}
     assert lib.parse_weights(None) == {}
+    # a mapping gives its weights, not its names at weight 1 (a dict of 0.3 was read as 1)
+    assert lib.parse_weights({"happiness": 0.3}) == {"happiness": 0.3}
+    assert lib.parse_weights(pd.Series({"anger": 0.5})) == {"anger": 0.5}
+    with pytest.raises(InputError, match="negative"):
+        lib.parse_weights({"anger": -1})
     for bad, msg in [("anger=-1", "negative"), ("anger=nan", "finite"), ("=2", "NAME=WEIGHT"), ("anger=x", "number")]:
         with pytest.raises(InputError, match=msg):
             lib.parse_weights(bad)

@@ -367,6 +367,9 @@ class OpeningDetector:
         Openings
             Largest first; ``count == 0`` when nothing is found.
         """
+        frame = np.asarray(frame)
+        if frame.dtype != np.uint8 or frame.ndim != 3 or frame.shape[2] != 3:   # floats 0..1 read as black
+            raise InputError(f"a frame must be RGB uint8 (height, width, 3), got {frame.dtype} {frame.shape}")
         box = MouthBox.of(box)
         x0, y0, x1, y1 = box.region(self.pad, frame.shape[1], frame.shape[0])
         w = box.mouth_width

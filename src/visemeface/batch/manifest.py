@@ -113,7 +113,7 @@ def _emotions(value) -> tuple[tuple[str, float], ...]:
 
     if isinstance(value, (tuple, list)) and all(isinstance(v, (tuple, list)) for v in value):
         value = [f"{n}={w!r}" for n, w in value]
-    specs = _split(value) if isinstance(value, str) else list(value or ())
+    specs = _split(value) if isinstance(value, str) else value if hasattr(value, "items") else list(value or ())
     return tuple(sorted(parse_emotions(specs or None, load_expressions().index).items()))
 
 

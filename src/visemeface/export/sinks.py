@@ -27,7 +27,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from visemeface.errors import InputError
+from visemeface.errors import InputError, close_matches
 from visemeface.outputs import Staged, check_suffix, output_path
 
 #: name -> Sink subclass, in registration order (the order of the CLI options).
@@ -100,6 +100,12 @@ class Sink:
     arguments: ClassVar[tuple] = ()
 
     def __init__(self, path, force: bool = False, **settings):
+        known = {kw["dest"] for _, kw in self.arguments}
+        unknown = sorted(set(settings) - known - {"resume"})
+        if unknown:                     # a misspelt setting would silently give the default output
+            raise InputError(f"the {self.name} output has no setting {unknown[0]!r}"
+                             + (f"; it has: {', '.join(sorted(known))}" if known else "; it has none")
+                             + close_matches(unknown[0], sorted(known)))
         self.path = output_path(path)
         if self.suffixes:
             check_suffix(self.path, *self.suffixes)

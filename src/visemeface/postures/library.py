@@ -110,12 +110,15 @@ def parse_weights(specs: Iterable[str] | str | None) -> dict[str, float]:
     """Parse ``NAME[=WEIGHT]`` strings (``"happiness=0.6"``) into a dict.
 
     Several may be given as a list or comma-separated; a bare name means
-    weight 1. Weights must be finite and non-negative.
+    weight 1. A mapping (a dict or a pandas Series, name -> weight) gives its
+    weights as they are. Weights must be finite and non-negative.
     """
     if specs is None:
         return {}
     if isinstance(specs, str):
         specs = [specs]
+    elif hasattr(specs, "items"):                   # {name: weight}: not its names alone at weight 1
+        return {str(name).strip(): _weight(str(name), value) for name, value in specs.items()}
     out: dict[str, float] = {}
     for spec in specs:
         parts = [p.strip() for p in str(spec).split(",")]

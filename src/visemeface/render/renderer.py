@@ -115,14 +115,18 @@ def _orthographic(half_w, half_h, near, far) -> np.ndarray:
     return m
 
 
+#: The largest frame side (px) the renderer draws.
+MAX_SIZE = 4096
+
+
 def _check_size(size) -> tuple[int, int]:
     try:
         w, h = (int(size), int(size)) if np.isscalar(size) else (int(size[0]), int(size[1]))
     except (TypeError, ValueError, IndexError):
         raise InputError(f"size must be an integer or (width, height), got {size!r}") from None
     for v in (w, h):
-        if v < 16 or v > 4096 or v % 16:
-            raise InputError(f"frame size must be a multiple of 16 from 16 to 4096, got {w}x{h}")
+        if v < 16 or v > MAX_SIZE or v % 16:
+            raise InputError(f"frame size must be a multiple of 16 from 16 to {MAX_SIZE}, got {w}x{h}")
     return w, h
 
 
@@ -351,6 +355,12 @@ class Renderer:
         if ctx is not None:
             ctx.release()
             self.ctx = None
+
+    def __del__(self):
+        try:
+            self.release()
+        except Exception:               # at interpreter exit the GL library may be gone already
+            pass
 
     def __enter__(self):
         return self

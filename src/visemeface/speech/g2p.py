@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import csv
 import math
+import numbers
 import re
 import warnings
 from functools import lru_cache
@@ -126,7 +127,8 @@ def cmu_pronunciations(words) -> dict[str, list[list[str]]]:
     return found
 
 
-from visemeface.speech.numbers import money_to_words, number_to_words, ordinal_to_words  # noqa: E402  (re-exported)
+from visemeface.speech.numbers import (  # noqa: E402  (the three spellers re-exported)
+    SPELLED, money_to_words, number_to_words, ordinal_to_words)
 
 
 # ----------------------------------------------------------------------------- words
@@ -261,10 +263,6 @@ _TOKEN = re.compile(r"""
 """, re.VERBOSE)
 
 
-#: Tokens read as words: numbers, ordinals (21st), amounts of money ($3.50).
-_SPELLED = {"number": number_to_words, "ordinal": ordinal_to_words, "money": money_to_words}
-
-
 def _line_of(text: str, pos: int) -> int:
     return text.count("\n", 0, pos) + 1
 
@@ -295,8 +293,8 @@ def _plain_tokens(text: str, start: int, end: int):
     for m in _TOKEN.finditer(text, start, end):
         line = _line_of(text, m.start())
         kind = m.lastgroup
-        if kind in _SPELLED:
-            for w in _SPELLED[kind](m.group(0)):
+        if kind in SPELLED:
+            for w in SPELLED[kind](m.group(0)):
                 yield "word", w, line
         elif kind == "word":
             yield "word", m.group(0).replace("’", "'"), line
@@ -440,9 +438,11 @@ def text_to_utterance(text: str, rate_wpm: float | None = None, *, path=None, wa
     t = timing()
     if rate_wpm is None:
         rate_wpm = t["default_rate_wpm"]
-    if not (isinstance(rate_wpm, (int, float)) and math.isfinite(rate_wpm) and 20 <= rate_wpm <= 1000):
+    if not (isinstance(rate_wpm, numbers.Real) and math.isfinite(rate_wpm) and 20 <= rate_wpm <= 1000):
         raise InputError(f"speaking rate {rate_wpm!r} words/min is not in 20..1000", path)
-    text = str(text).lstrip("\ufeff")
+    if not isinstance(text, str):                  # str(None) would be spoken "none"
+        raise InputError(f"the text must be a str, got {type(text).__name__}", path)
+    text = text.lstrip("\ufeff")
     items = _phrase_items(text, path, warn)
     n_words = sum(1 for it in items if it[0] == "word")
     if n_words == 0:

@@ -128,3 +128,7 @@ def money_to_words(token: str) -> list[str]:
     if hundredths:
         words += number_to_words(str(hundredths)) + [cent if hundredths == 1 else cents]
     return words
+
+
+#: The text front end's tokens read as words, by kind: numbers, ordinals (21st), amounts of money ($3.50).
+SPELLED = {"number": number_to_words, "ordinal": ordinal_to_words, "money": money_to_words}
