@@ -243,6 +243,10 @@ def test_parse_weights():
     assert lib.parse_weights(pd.Series({"anger": 0.5})) == {"anger": 0.5}
     with pytest.raises(InputError, match="negative"):
         lib.parse_weights({"anger": -1})
+    # blend takes every form: a dict, a Series (it raised pandas' "ambiguous"), a list, a string
+    smile = [float(lib.blend("ah", e)["zygomatic_major_left"])
+             for e in ({"happiness": 0.6}, pd.Series({"happiness": 0.6}), ["happiness=0.6"], "happiness=0.6")]
+    assert smile == [pytest.approx(0.6)] * 4
     for bad, msg in [("anger=-1", "negative"), ("anger=nan", "finite"), ("=2", "NAME=WEIGHT"), ("anger=x", "number")]:
         with pytest.raises(InputError, match=msg):
             lib.parse_weights(bad)

@@ -197,9 +197,9 @@ def blend(viseme: str, emotions: Mapping[str, float] | None = None, w_viseme: fl
         raise InputError(f"unknown viseme {viseme!r}{close_matches(viseme.lower(), visemes.index)}")
     w_v = _weight("viseme", w_viseme)
     total = w_v * visemes.loc[viseme].reindex(list(names), fill_value=0.0).to_numpy(dtype=float)
-    if isinstance(emotions, str):         # "happiness=0.6, anger" as on the command line
-        emotions = parse_weights(emotions)
-    for name, w in (emotions or {}).items():
+    # "happiness=0.6, anger" as on the command line, a list of such, a dict or a pandas Series
+    emotions = parse_weights(emotions)
+    for name, w in emotions.items():
         name = str(name).strip()
         if name not in expressions.index and name.lower() in expressions.index:
             name = name.lower()           # emotion names are lower case, as viseme symbols
