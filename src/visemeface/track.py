@@ -20,9 +20,10 @@ integer up to floating-point error (``0.1 · 30``) is not off by one.
 
 The frame rate of a track (one rule)
 ------------------------------------
-:func:`track_fps`: ``attrs["fps"]`` when present; otherwise the time step of
-an evenly sampled index (every step within 0.1% of the median); otherwise an
-:class:`~visemeface.errors.InputError`. Nothing falls back to a silent 30 fps.
+:func:`track_fps`: ``attrs["fps"]`` when present (an evenly sampled index must
+agree with it); otherwise the time step of an evenly sampled index (every step
+within 0.1% of the median); otherwise an :class:`~visemeface.errors.InputError`.
+Nothing falls back to a silent 30 fps.
 """
 
 from __future__ import annotations
@@ -76,14 +77,18 @@ def frame_times(n: int, fps: float) -> np.ndarray:
 def track_fps(track: pd.DataFrame) -> float:
     """The frame rate of an ActivationTrack (the one rule of the module docstring)."""
     fps = track.attrs.get("fps")
-    if fps is not None:
-        return check_fps(fps, "the track's frame rate (attrs['fps'])")
     t = np.asarray(track.index, dtype=np.float64)
-    if len(t) >= 2:
-        step = np.diff(t)
-        med = float(np.median(step))
-        if med > 0 and np.all(np.abs(step - med) <= 1e-3 * med):
-            return check_fps(1.0 / med, "the track's frame rate (from its time step)")
+    step = np.diff(t)
+    med = float(np.median(step)) if len(step) else 0.0
+    even = med > 0 and bool(np.all(np.abs(step - med) <= 1e-3 * med))
+    if fps is not None:
+        fps = check_fps(fps, "the track's frame rate (attrs['fps'])")
+        if even and abs(fps * med - 1.0) > 1e-3:     # a slice (track.iloc[::2]) keeps the old attrs
+            raise InputError(f"the track's attrs['fps'] ({fps:g}) disagrees with its time step "
+                             f"({1.0 / med:g} fps); set attrs['fps'] to the rate of its rows")
+        return fps
+    if even:
+        return check_fps(1.0 / med, "the track's frame rate (from its time step)")
     raise InputError("the activation track has no frame rate: set attrs['fps'] "
                      "(its times are not evenly spaced, so none can be inferred)")
 
@@ -197,9 +202,9 @@ def load_track(path) -> pd.DataFrame:
     track = pd.DataFrame(np.delete(arr, ti, axis=1), index=pd.Index(times, name="time"), columns=cols)
     if fps is not None:
         track.attrs["fps"] = fps
-    else:
-        try:
-            track.attrs["fps"] = track_fps(track)
-        except InputError as exc:
-            raise InputError(exc.reason + " (or write a '# fps=<rate>' line first)", path) from None
+    try:
+        track.attrs["fps"] = track_fps(track)      # the header's rate checked against the times
+    except InputError as exc:
+        more = "" if fps is not None else " (or write a '# fps=<rate>' line first)"
+        raise InputError(exc.reason + more, path) from None
     return track

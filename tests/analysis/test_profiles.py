@@ -93,7 +93,7 @@ def test_csv_round_trip(tmp_path, merging):
     write_profile(merging, path)
     back = read_profile(path)
     pd.testing.assert_frame_equal(back, merging, check_exact=False, rtol=1e-7)
-    assert back.attrs["fps"] == pytest.approx(30)
+    assert back.attrs["fps"] == 30.0                 # exactly: not 30.000003 from 8-digit times
     with pytest.raises(InputError, match="exists"):
         write_profile(merging, path)
 

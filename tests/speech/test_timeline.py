@@ -272,6 +272,16 @@ def test_load_track_infers_fps_and_reports_bad_cells(tmp_path):
     p.write_text("jaw\n0.1\n")
     with pytest.raises(InputError, match="no 'time' column"):
         load_track(p)
+    # an fps= line its times contradict, and a slice that kept its old rate, are refused (played at the
+    # wrong speed before)
+    p.write_text("# fps=30\ntime,jaw\n0,0.1\n0.04,0.2\n0.08,0.3\n")
+    with pytest.raises(InputError, match=r"attrs\['fps'\] \(30\) disagrees with its time step \(25 fps\)"):
+        load_track(p)
+    from visemeface.track import track_fps
+    track = activation_track(segs(["aa", "m", "aa"], 0.2), toy_visemes(), fps=30)
+    assert track_fps(track) == 30
+    with pytest.raises(InputError, match="disagrees"):
+        track_fps(track.iloc[::2])
 
 
 def test_closure_holds_only_the_lip_opening_functions():

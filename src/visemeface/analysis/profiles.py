@@ -164,13 +164,17 @@ def per_frame_boxes(box):
 
 
 def write_profile(df: pd.DataFrame, path: str | Path, force: bool = False) -> None:
-    """Write a profile as CSV (never overwrites without ``force``)."""
+    """Write a profile as CSV (never overwrites without ``force``): measures to 8 significant digits, times
+    to 12 (the frame rate is read back from them)."""
+    out = df.loc[:, list(COLUMNS)].copy()
+    out["time"] = [f"{t:.12g}" for t in out["time"].to_numpy(float)]
     with atomic_output(path, force) as tmp:
-        df.loc[:, list(COLUMNS)].to_csv(tmp, index=False, float_format="%.8g", lineterminator="\n")
+        out.to_csv(tmp, index=False, float_format="%.8g", lineterminator="\n")
 
 
 def read_profile(path: str | Path) -> pd.DataFrame:
-    """Read a profile CSV written by :func:`write_profile`; ``attrs["fps"]`` from the times."""
+    """Read a profile CSV written by :func:`write_profile`; ``attrs["fps"]`` from the times (over their
+    whole span, to 9 significant digits). Other ``attrs`` (the mouth width) are not in the CSV."""
     path = Path(path)
     if not path.is_file():
         raise InputError("no such file", path)
@@ -199,7 +203,9 @@ def read_profile(path: str | Path) -> pd.DataFrame:
         raise InputError("times must increase from row to row", path)
     if "d_area" not in df.columns or "d_width" not in df.columns:
         add_derivatives(df)
-    df.attrs.update(fps=float(1.0 / np.median(np.diff(t))), source=str(path))
+    fps = (len(t) - 1) / (t[-1] - t[0]) if np.allclose(np.diff(t), np.median(np.diff(t)), rtol=1e-3) \
+        else 1.0 / np.median(np.diff(t))
+    df.attrs.update(fps=float(f"{fps:.9g}"), source=str(path))
     return df
 
 
