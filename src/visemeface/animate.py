@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 
-from visemeface.errors import InputError, close_matches
+from visemeface.errors import InputError, table_name
 
 #: Longest utterance one run animates (s): longer means wrong units far more often than a 3-hour take.
 MAX_UTTERANCE_S = 3 * 3600
@@ -28,10 +28,7 @@ def parse_emotions(specs, known: Iterable[str]) -> dict[str, float]:
     known = list(known)
     emotions = {}
     for name, weight in parse_weights(specs).items():
-        if name not in known and name.lower() in known:
-            name = name.lower()           # emotion names are lower case, as viseme symbols
-        if name not in known:
-            raise InputError(f"unknown emotion {name!r}{close_matches(name.lower(), known)}")
+        name = table_name(name, known, "emotion")
         emotions[name] = emotions.get(name, 0.0) + weight
     for name, weight in emotions.items():
         if not 0.0 <= weight <= 1.0:
@@ -107,9 +104,8 @@ def animate(utterance, sinks: list, render=None, *, rig=None, emotions=None, int
     from visemeface.motion import KinematicMotion
     from visemeface.muscles.rig import default_rig
     from visemeface.postures.library import load_expressions, load_visemes
-    from visemeface.speech.timeline import MODES, activation_track
-
     from visemeface.export.sinks import check_physics_outputs
+    from visemeface.speech.timeline import MODES, activation_track
 
     check_physics_outputs([s.name for s in sinks], physics, option="")
     if utterance.end > MAX_UTTERANCE_S:

@@ -90,3 +90,16 @@ def choose(name: str, known: Iterable[str], what: str, aliases: dict[str, str] |
     if key not in known:
         raise InputError(f"unknown {what} {name!r}; choose one of {', '.join(known)}{close_matches(key, known)}")
     return key
+
+
+def table_name(name, known, what: str) -> str:
+    """``name`` (trimmed) as the table ``known`` spells it: itself, or in lower case (emotion names and
+    DECtalk symbols are lower case, so "AA" is /aa/). Raises :class:`InputError` "unknown WHAT 'x'
+    (did you mean: ...?)" without listing every name, unlike :func:`choose`.
+    """
+    name = str(name).strip()
+    if name not in known and name.lower() in known:
+        name = name.lower()
+    if name not in known:
+        raise InputError(f"unknown {what} {name!r}{close_matches(name.lower(), known)}")
+    return name

@@ -29,7 +29,7 @@ from collections.abc import Iterable, Mapping
 import numpy as np
 import pandas as pd
 
-from visemeface.errors import InputError, close_matches
+from visemeface.errors import InputError, table_name
 from visemeface.muscles.measure import TARGET_DIMENSIONS  # noqa: F401  (lip-shape target columns, re-exported)
 from visemeface.muscles.rig import SPEECH_FUNCTIONS  # noqa: F401  (seed 002 Table 1, re-exported)
 from visemeface.postures.tables import (EMOTIONS, _default_rig, _rig_spec, expression_info,  # noqa: F401
@@ -190,22 +190,14 @@ def blend(viseme: str, emotions: Mapping[str, float] | None = None, w_viseme: fl
     names, ranges = _rig_spec(rig)
     visemes = library.visemes if visemes is None else visemes
     expressions = library.expressions if expressions is None else expressions
-    viseme = str(viseme).strip()
-    if viseme not in visemes.index and viseme.lower() in visemes.index:
-        viseme = viseme.lower()           # DECtalk symbols are lower case; "AA" means /aa/
-    if viseme not in visemes.index:
-        raise InputError(f"unknown viseme {viseme!r}{close_matches(viseme.lower(), visemes.index)}")
+    viseme = table_name(viseme, visemes.index, "viseme")
     w_v = _weight("viseme", w_viseme)
     total = w_v * visemes.loc[viseme].reindex(list(names), fill_value=0.0).to_numpy(dtype=float)
     # "happiness=0.6, anger" as on the command line, a list of such, a dict or a pandas Series
-    emotions = parse_weights(emotions)
+    emotions = parse_weights(emotions)              # trimmed names, weights checked
     for name, w in emotions.items():
-        name = str(name).strip()
-        if name not in expressions.index and name.lower() in expressions.index:
-            name = name.lower()           # emotion names are lower case, as viseme symbols
-        if name not in expressions.index:
-            raise InputError(f"unknown emotion {name!r}{close_matches(name, expressions.index)}")
-        total = total + _weight(name, w) * expressions.loc[name].reindex(list(names), fill_value=0.0).to_numpy(dtype=float)
+        name = table_name(name, expressions.index, "emotion")
+        total = total + w * expressions.loc[name].reindex(list(names), fill_value=0.0).to_numpy(dtype=float)
     clamped = np.clip(total, ranges[:, 0], ranges[:, 1])
     out = pd.Series(clamped, index=pd.Index(names, name="function"), name=viseme)
     if keep_contact and viseme in _contact_postures() and emotions and w_v > 0:
