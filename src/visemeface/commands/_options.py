@@ -252,17 +252,6 @@ def add_text_arguments(g) -> None:
     g.add_argument("--text-file", type=Path, metavar="TXT", help="read the words from a text file")
 
 
-def words_path(recording: Path, text, text_file) -> Path | None:
-    """The file the words of ``recording`` are read from (``--text-file``, else a same-named .txt
-    beside it), or None (``--text``, or no such file)."""
-    if text is not None:
-        return None
-    if text_file is not None:
-        return Path(text_file)
-    beside = recording.with_suffix(".txt")
-    return beside if beside.is_file() else None
-
-
 def check_not_words(targets, recording: Path, text_file) -> None:
     """Refuse an output that is the words file of ``recording``: ``--text-file``, or the same-named .txt
     beside it, which a later run reads as its words, whether it exists yet or not (and whatever --force)."""
@@ -284,7 +273,8 @@ def text_of(recording: Path, text, text_file, quiet: bool = False):
         if not text.strip():
             raise InputError("--text is empty")
         return text, None
-    path = words_path(recording, text, text_file)
+    beside = recording.with_suffix(".txt")
+    path = text_file if text_file is not None else (beside if beside.is_file() else None)
     if path is None:
         return None, None
     words = read_text(path, "text file")

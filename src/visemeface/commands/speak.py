@@ -60,11 +60,12 @@ def add_animation_arguments(p: argparse.ArgumentParser, video_default: str) -> N
                              "rendered into --frames DIR, continue a --physics simulation from its checkpoint")
 
 
-def check_early(args, default_video: Path, inputs=()):
+def check_early(args, default_video: Path, inputs=(), recording: Path | None = None):
     """Everything that needs no transcript or rig: outputs, render settings, fps, audio, physics.
 
     Returns (sinks, render settings, physics settings or None, the staged ``--save-transcript`` or None);
-    refuses an output that is one of ``inputs`` (paths) or another output.
+    refuses an output that is one of ``inputs`` (paths), the words of ``recording``
+    (:func:`~visemeface.commands._options.check_not_words`) or another output.
     """
     from visemeface.errors import InputError
     from visemeface.export.sinks import check_physics_outputs
@@ -78,8 +79,10 @@ def check_early(args, default_video: Path, inputs=()):
         check_audio(args.audio)
     saved = _transcript_target(args)
     targets = [t for s in sinks for t in s.targets()]
-    check_not_inputs(targets + ([saved.path] if saved is not None else []),
-                     [*inputs, *([args.audio] if args.audio is not None else [])])
+    written = targets + ([saved.path] if saved is not None else [])
+    check_not_inputs(written, [*inputs, *([args.audio] if args.audio is not None else [])])
+    if recording is not None:
+        opt.check_not_words(written, recording, args.text_file)
     if saved is not None and Path(saved.path).resolve() in {Path(t).resolve() for t in targets}:
         raise InputError("--save-transcript and another output are the same path", saved.path)
     physics = opt.physics_from_args(args)
@@ -190,11 +193,9 @@ def run(args) -> int:
 
     if not args.transcript.is_file():
         raise InputError("transcript not found", args.transcript)
-    sinks, render, physics, saved = check_early(args, Path.cwd() / (args.transcript.stem + ".mp4"),
-                                                inputs=[args.transcript])
-    if is_recording(args.transcript):
-        opt.check_not_words([t for s in sinks for t in s.targets()] + ([saved.path] if saved else []),
-                            args.transcript, args.text_file)
+    sinks, render, physics, saved = check_early(
+        args, Path.cwd() / (args.transcript.stem + ".mp4"), inputs=[args.transcript],
+        recording=args.transcript if is_recording(args.transcript) else None)
     utterance, recording = _read_input(args)
     with tempfile.TemporaryDirectory(prefix="visemeface-") as folder:
         sound = None if recording is None else media_wav(recording, folder)
