@@ -74,20 +74,24 @@ def frame_times(n: int, fps: float) -> np.ndarray:
     return np.arange(int(n), dtype=np.float64) / float(fps)
 
 
+def even_step(times) -> float:
+    """The time step of evenly sampled ``times`` (every step within 0.1% of the median), else 0."""
+    step = np.diff(np.asarray(times, dtype=np.float64))
+    med = float(np.median(step)) if len(step) else 0.0
+    return med if med > 0 and bool(np.all(np.abs(step - med) <= 1e-3 * med)) else 0.0
+
+
 def track_fps(track: pd.DataFrame) -> float:
     """The frame rate of an ActivationTrack (the one rule of the module docstring)."""
     fps = track.attrs.get("fps")
-    t = np.asarray(track.index, dtype=np.float64)
-    step = np.diff(t)
-    med = float(np.median(step)) if len(step) else 0.0
-    even = med > 0 and bool(np.all(np.abs(step - med) <= 1e-3 * med))
+    med = even_step(track.index)                     # 0: not evenly sampled
     if fps is not None:
         fps = check_fps(fps, "the track's frame rate (attrs['fps'])")
-        if even and abs(fps * med - 1.0) > 1e-3:     # a slice (track.iloc[::2]) keeps the old attrs
+        if med and abs(fps * med - 1.0) > 1e-3:      # a slice (track.iloc[::2]) keeps the old attrs
             raise InputError(f"the track's attrs['fps'] ({fps:g}) disagrees with its time step "
                              f"({1.0 / med:g} fps); set attrs['fps'] to the rate of its rows")
         return fps
-    if even:
+    if med:
         return check_fps(1.0 / med, "the track's frame rate (from its time step)")
     raise InputError("the activation track has no frame rate: set attrs['fps'] "
                      "(its times are not evenly spaced, so none can be inferred)")

@@ -30,6 +30,7 @@ import pandas as pd
 from visemeface.analysis.openings import MouthBox, OpeningDetector, Openings
 from visemeface.errors import InputError
 from visemeface.outputs import atomic_output
+from visemeface.track import even_step
 
 COLUMNS = ("frame", "time", "count", "area", "width", "height", "d_area", "d_width")
 METRICS = ("area", "width", "height")
@@ -203,8 +204,7 @@ def read_profile(path: str | Path) -> pd.DataFrame:
         raise InputError("times must increase from row to row", path)
     if "d_area" not in df.columns or "d_width" not in df.columns:
         add_derivatives(df)
-    fps = (len(t) - 1) / (t[-1] - t[0]) if np.allclose(np.diff(t), np.median(np.diff(t)), rtol=1e-3) \
-        else 1.0 / np.median(np.diff(t))
+    fps = (len(t) - 1) / (t[-1] - t[0]) if even_step(t) else 1.0 / np.median(np.diff(t))
     df.attrs.update(fps=float(f"{fps:.9g}"), source=str(path))
     return df
 
