@@ -95,7 +95,7 @@ def time_kernels(solver, reps, blocks=5):
     u = np.random.default_rng(0).normal(0, 1e-5, (solver.mesh.n_nodes, 3))
     uprev, unew = u.copy(), np.zeros_like(u)
     args = (u, solver.conn, solver.dhdx, solver.volume, solver.gamma, solver.hourglass_stiffness,
-            solver.mu, solver.K, solver._fe, solver._jac, solver._fdef, False, solver._energy, False)
+            solver.mu, solver.K, solver.ijm, solver._fe, solver._jac, solver._fdef, False, solver._energy, False)
     fe = solver._fe.reshape(-1, 3)
     R = np.zeros_like(u)
     int_args = (fe, solver._ptr, solver._slot, R, solver._A, solver._B, solver._C, u, uprev, unew)

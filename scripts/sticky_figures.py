@@ -244,13 +244,29 @@ def fig_glue03(fem, rig, fps, common, runs):
     emit(figure="glue03", jaw=0.35, **m,
          later_than_0p08=(m.get("first_open_frame", 1e9) > ref.get("first_open_frame", -1)))
     full = drive.ramp_track(rig.names, fps, 0.05, RAMP or 0.35, 0.75, 1.0)
-    m3 = zipper_measures(*run(fem, rig, full, "sticky", glue=0.3, **common), fps)
-    m0 = zipper_measures(*run(fem, rig, full, "sticky", **common), fps)
-    keys = ("opens", "first_open_frame", "full_span", "first_to_full_s", "distinct_widths")
-    emit(figure="glue03_full_jaw", jaw=1.0, glue03={k: m3.get(k) for k in keys},
-         default_glue={k: m0.get(k) for k in keys},
+    s3, f3 = run(fem, rig, full, "sticky", glue=0.3, **common)
+    s0, f0 = run(fem, rig, full, "sticky", **common)
+    m3, m0 = zipper_measures(s3, f3, fps), zipper_measures(s0, f0, fps)
+    keys = ("opens", "first_open_frame", "first_open_abs_s", "full_span", "first_to_full_s", "distinct_widths")
+    emit(figure="glue03_full_jaw", jaw=1.0, glue03={**{k: m3.get(k) for k in keys}, **film_and_tissue(s3)},
+         default_glue={**{k: m0.get(k) for k in keys}, **film_and_tissue(s0)},
          parts_fully=bool(m3.get("opens") and m3.get("full_span", 0) >= 0.99 * m0.get("full_span", 1e9)),
          later=bool(m3.get("opens") and m0.get("opens") and m3["first_open_frame"] > m0["first_open_frame"]))
+
+
+def film_and_tissue(sim, near: float = 0.6) -> dict:
+    """At the run's end: the film's slabs broken, and the largest principal stretch (from rest) of the tissue
+    elements within ``near`` mouth widths of the film's centroid (99th percentile and largest)."""
+    s = sim.model.tissue_solver
+    u = sim.state.u
+    F = np.eye(3) + np.einsum("eai,eaj->eij", u[s.conn], s.dhdx)
+    stretch = np.sqrt(np.linalg.eigvalsh(np.swapaxes(F, 1, 2) @ F)[:, -1])
+    X = s.mesh.nodes
+    centre = X[np.unique(np.concatenate([sim.film.n0.ravel(), sim.film.n1.ravel()]))].mean(axis=0)
+    close = np.linalg.norm(X[s.conn].mean(axis=1) - centre, axis=1) < near * sim.fem.mouth_width
+    return {"slabs_broken": int(sim.broken.sum()), "slabs": int(len(sim.broken)),
+            "tissue_stretch_p99": round(float(np.percentile(stretch[close], 99)), 2),
+            "tissue_stretch_max": round(float(stretch[close].max()), 2)}
 
 
 def fig_equilibrium(fem, runs):
@@ -362,6 +378,9 @@ def main():
     ap.add_argument("--strand", type=float, default=0.0, help="cohesive strand length, m (0: none)")
     ap.add_argument("--film-corners", action="store_true",
                     help="carry the film into the mouth corners (default: it ends at the last seam pair, a free end)")
+    ap.add_argument("--tissue-limit", type=float, default=float("inf"),
+                    help="soft tissue's limiting uniaxial stretch (Gent; inf, the default: the seed's neo-Hookean; "
+                         "materials.TISSUE_LIMIT, 2.5, is the stiffest the explicit step holds at glue 0.3, full jaw)")
     ap.add_argument("--seam-elements", type=int, default=None,
                     help="refine the lips to at least this many tissue elements along the seam (build_fem_face)")
     ap.add_argument("--image", default="sticky_zipper.png", help="zipper picture's name in docs/images/")
@@ -389,7 +408,8 @@ def main():
     only = set(args.only.split(","))
     from visemeface.physics.saliva import SalivaParams
     common = {"lip_bone": args.lip_bone, "posture_hz": args.posture_hz, "muscles": args.muscles,
-              "film_corners": args.film_corners, "dt": args.dt, "multirate": not args.single_rate}
+              "film_corners": args.film_corners, "dt": args.dt, "multirate": not args.single_rate,
+              "tissue_limit": args.tissue_limit}
     extra = {} if args.rupture_time is None else {"rupture_time": args.rupture_time}
     common["saliva"] = SalivaParams(soften=args.soften, viscosity=args.viscosity, strand=args.strand, **extra)
     global RAMP, IMAGE, MERGE_IMAGE

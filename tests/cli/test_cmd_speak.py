@@ -414,6 +414,9 @@ def test_speak_physics_frames_come_from_the_fem_face(short, capsys, coarse_rig):
     (["--physics", "sticky", "--seam-elements", "-1"], "--seam-elements must be in 0..192"),
     (["--physics", "sticky", "--seam-elements", "4800"], "--seam-elements must be in 0..192"),
     (["--seam-elements", "48"], "--seam-elements needs --physics sticky or elastic"),
+    (["--physics", "sticky", "--tissue-limit", "1"], "--tissue-limit must be a stretch > 1"),
+    (["--physics", "sticky", "--tissue-limit", "nan"], "--tissue-limit must be a stretch > 1"),
+    (["--tissue-limit", "2.5"], "--tissue-limit needs --physics sticky or elastic"),
     (["--physics", "elastic", "--glue", "0.3"], "--glue sets the glue between the lips, which --physics elastic"),
     (["--physics", "elastic", "--moisture", "50"], "--moisture sets the glue"),
     (["--measures", "m.csv"], "--measures writes a simulation's figures: it needs --physics"),
@@ -447,6 +450,10 @@ def test_the_speech_lips_glue_the_mouth_corners_unless_told_not_to():
     assert physics_from_args(p.parse_args(["--physics", "sticky", "--no-film-corners"])).film_corners is False
     with pytest.raises(InputError, match="--no-film-corners needs --physics"):
         physics_from_args(p.parse_args(["--no-film-corners"]))
+    # the tissue: the seed's neo-Hookean unless a limiting stretch is given (elastic too: it is no glue)
+    assert physics_from_args(p.parse_args(["--physics", "sticky"])).tissue.ijm == 0.0
+    gent = physics_from_args(p.parse_args(["--physics", "elastic", "--tissue-limit", "2.5"])).tissue
+    assert gent.limiting_stretch == pytest.approx(2.5) and gent.mu == 800.0
 
 
 def test_absurd_transcript_length_and_msaa_are_refused_before_work(short, capsys):

@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 from visemeface.errors import InputError
 from visemeface.physics import saliva as sv
+from visemeface.physics.materials import SOFT_TISSUE
 
 # --------------------------------------------------------------------------- moisture, breaking point
 
@@ -577,7 +578,7 @@ def test_a_step_is_its_parts_bit_for_bit(model):
     geo = [(y - x) * w + x for x, y in zip(tissue.geometry(i), tissue.geometry(i + 1))]
     uY = ref.u - mdl.terms["tissue"].drive.target(t)
     fe, jac = np.zeros_like(s._fe), np.zeros_like(s._jac)
-    tled._element_forces_np(uY, s.conn, *geo, s.mu, s.K, fe, jac, s._fdef, False, np.zeros_like(jac), False)
+    tled._element_forces_np(uY, s.conn, *geo, s.mu, s.K, s.ijm, fe, jac, s._fdef, False, np.zeros_like(jac), False)
     R = np.zeros_like(ref.u)
     mdl.terms["saliva"].add(ref, t, R)
     R += mdl.terms["drag"].alpha_m * mdl.terms["drag"].drive.target_velocity(t)
@@ -617,7 +618,7 @@ def test_a_multirate_step_is_its_parts(model):
 
     def tissue_force(u, tt):
         fe, jac = np.zeros_like(s._fe), np.zeros_like(s._jac)
-        tled._element_forces_np(u - tissue.drive.target(tt), s.conn, *geo, s.mu, s.K, fe, jac, s._fdef, False,
+        tled._element_forces_np(u - tissue.drive.target(tt), s.conn, *geo, s.mu, s.K, s.ijm, fe, jac, s._fdef, False,
                                 np.zeros_like(jac), False)
         F = np.zeros_like(u)
         np.add.at(F, s.conn.ravel(), fe.reshape(-1, 3))
@@ -692,6 +693,13 @@ def test_no_force_term_knows_the_seam_and_terms_switch_off(model):
     assert [n for n, t in off.model.terms.items() if t.enabled] == ["tissue"]
     with pytest.raises(InputError, match="unknown force term 'salvia'"):
         drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(off=("salvia",)))
+    # a limiting stretch makes the tissue term's solver Gent (the same μ, K); none leaves it neo-Hookean
+    gent = drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(tissue_limit=2.5))
+    assert (gent.model.tissue_solver.ijm == 1.0 / SOFT_TISSUE.with_limiting_stretch(2.5).jm).all()
+    assert (sim.model.tissue_solver.ijm == 0.0).all()
+    assert gent.fingerprint() != sim.fingerprint()
+    with pytest.raises(InputError, match="limiting stretch must be > 1"):
+        drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(tissue_limit=1.0))
 
 
 def test_each_term_alone_pushes_the_way_it_should(model):

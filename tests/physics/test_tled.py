@@ -452,3 +452,75 @@ def test_a_run_is_the_same_bits_whatever_the_meshs_node_numbering(backend):
     assert np.abs(runs[0][-1][0] - u0).max() > 1e-6
     order = first_touch_order(m.hexes, m.n_nodes)
     assert sorted(order.tolist()) == list(range(m.n_nodes)) and order[0] == m.hexes[0, 0]
+
+
+# --------------------------------------------------------------------------- Gent's limiting stretch
+
+GENT = SOFT_TISSUE.with_limiting_stretch(2.5)
+
+
+def test_gent_is_neo_hookean_times_its_stiffening_and_its_energy_is_the_stress_potential():
+    """S = μ J^(-2/3) g (I − I₁C⁻¹/3) + K J(J−1) C⁻¹ with g = 1/(1 − (Ī₁−3)/J_m): the patch test's stress on
+    distorted elements (numba) equals that law, and S = 2 ∂W/∂C by central differences of W."""
+    assert GENT.jm == pytest.approx(2.5 ** 2 + 2 / 2.5 - 3) and GENT.limiting_stretch == pytest.approx(2.5)
+    assert SOFT_TISSUE.ijm == 0.0 and np.isinf(SOFT_TISSUE.limiting_stretch)
+    m = _distorted_box(amount=0.25)
+    stretch = np.array([2.0, 0.75, 0.7])
+    u = m.nodes * (stretch - 1.0)
+    J, I1 = stretch.prod(), (stretch ** 2).sum()
+    g = 1.0 / (1.0 - (J ** (-2 / 3) * I1 - 3.0) / GENT.jm)
+    assert g > 1.5                                               # well into the stiffening
+    S_exact = np.diag(g * GENT.mu * J ** (-2 / 3) * (1 - I1 / (3 * stretch ** 2)) + GENT.K * J * (J - 1) / stretch ** 2)
+    solver = TLEDSolver(m, GENT, dt=1e-5)
+    assert np.abs(solver.element_stress(u)["S"] - S_exact).max() < 1e-6 * np.abs(S_exact).max()
+    f = solver.internal_forces(u)
+    P = np.diag(stretch) @ S_exact
+    assert f[m.node_sets["xmax"], 0].sum() == pytest.approx(P[0, 0] * 0.03 * 0.03, rel=1e-6)
+    # S = 2 dW/dC along each axis: W(λ) with C_ii = λ_i², so S_ii = (1/λ_i) dW/dλ_i
+    for i in range(3):
+        h = 1e-6
+        up, dn = stretch.copy(), stretch.copy()
+        up[i] += h
+        dn[i] -= h
+        dW = (strain_energy_density(np.diag(up), GENT.mu, GENT.K, GENT.ijm)
+              - strain_energy_density(np.diag(dn), GENT.mu, GENT.K, GENT.ijm)) / (2 * h)
+        assert dW / stretch[i] == pytest.approx(S_exact[i, i], rel=1e-6)
+    frames = list(TLEDSolver(m, GENT, dt=1e-5, prescribed=[(np.arange(m.n_nodes), lambda t: u)]).run(0))
+    W = strain_energy_density(np.diag(stretch), GENT.mu, GENT.K, GENT.ijm)
+    assert frames[0].strain_energy == pytest.approx(W * 0.03 ** 3, rel=1e-9)
+    numpy = TLEDSolver(m, GENT, dt=1e-5, backend="numpy")
+    assert np.abs(numpy.internal_forces(u) - f).max() < 1e-9 * np.abs(f).max()
+
+
+def test_gent_bar_stiffens_toward_its_limit_and_matches_neo_hookean_at_small_stretch():
+    small, _ = uniaxial_stress(1.05, GENT)
+    assert small == pytest.approx(uniaxial_stress(1.05, SOFT_TISSUE)[0], rel=0.02)
+    # the tissue is compressible (ν 0.45): its bar thins less than an incompressible one and locks past 2.5
+    ratio = [uniaxial_stress(s, GENT)[0] / uniaxial_stress(s, SOFT_TISSUE)[0] for s in (1.5, 2.0, 2.5, 2.9)]
+    assert all(b > a for a, b in zip(ratio, ratio[1:])) and ratio[0] < 1.2 and ratio[-1] > 5
+    # A bar held at stretch 2 by a dead load comes to rest there (dynamic relaxation of the TLED bar).
+    bar = box_mesh((4, 1, 1), (0.04, 0.01, 0.01))
+    P, _ = uniaxial_stress(1.8, GENT)
+    ends = bar.node_sets["xmax"]
+    per = P * 0.01 * 0.01 / len(ends)
+    solver = TLEDSolver(bar, GENT, dt=2e-5, damping=300.0, fixed=bar.node_sets["xmin"],
+                        forces=[(ends, lambda t: [per, 0.0, 0.0])])
+    # the fixed end holds the bar's lateral contraction there: compare the free half's stretch
+    *_, last = solver.run(60_000, output_every=60_000)
+    x = bar.nodes[:, 0]
+    mid = np.isclose(x, 0.02)
+    far = np.isclose(x, 0.04)
+    stretch = 1.0 + (last.displacement[far, 0].mean() - last.displacement[mid, 0].mean()) / 0.02
+    assert stretch == pytest.approx(1.8, rel=0.03)
+
+
+def test_an_element_at_the_limiting_stretch_stops_the_run_saying_so():
+    m = box_mesh((1, 1, 1), (0.01, 0.01, 0.01))
+    u = m.nodes * (np.array([3.0, 3 ** -0.5, 3 ** -0.5]) - 1.0)   # isochoric stretch 3: Ī₁ − 3 = 6.7 > J_m 4.05
+    solver = TLEDSolver(m, GENT, dt=1e-5, prescribed=[(np.arange(m.n_nodes), lambda t: u)])
+    with pytest.raises(SimulationDiverged, match="limiting stretch"):
+        next(iter(solver.run(1)))
+    with pytest.raises(InputError, match="limiting stretch must be > 1"):
+        SOFT_TISSUE.with_limiting_stretch(0.9)
+    with pytest.raises(InputError, match="jm must be a positive"):
+        NeoHookean(800.0, 7000.0, 1050.0, jm=0.0)

@@ -128,6 +128,9 @@ def add_physics_arguments(p: argparse.ArgumentParser, default: str, choices: tup
                    "along the seam: each seam edge split into equal parts, so the next multiple of the face's "
                    "own count (12 on the default face; default 48, one per saliva slab; 0: the face's own, the "
                    "seed's mesh)")
+    g.add_argument("--tissue-limit", type=float, metavar="L", help="the soft tissue stiffens without bound as it "
+                   "nears uniaxial stretch L (Gent's law; default: none, the seed's neo-Hookean tissue; 2.5 lets a "
+                   "strong --glue 0.3 go at full jaw, where the neo-Hookean lips stretch 7x and hold)")
     g.add_argument("--film-corners", action=argparse.BooleanOptionalAction, default=None,
                    help="carry the saliva film into the mouth corners, where the lips meet (default: on; "
                    "--no-film-corners ends it at the last pair of lip vertices, the seed's film, whose unglued "
@@ -150,7 +153,7 @@ def physics_from_args(args, **more):
 
     given = [f"--{'no-' if getattr(args, n) is False else ''}{n.replace('_', '-')}"       # as typed
              for n in ("glue", "glue_profile", "moisture", "evaporation", "rupture_time", "seam_elements",
-                       "film_corners") if getattr(args, n, None) is not None]
+                       "film_corners", "tissue_limit") if getattr(args, n, None) is not None]
     if args.physics == "none":
         if given:
             raise InputError(f"{given[0]} needs --physics sticky or elastic")
@@ -177,6 +180,10 @@ def physics_from_args(args, **more):
         if not (math.isfinite(args.glue) and args.glue >= 0):
             raise InputError(f"--glue must be >= 0 and finite, got {args.glue:g}")
         more["glue"] = args.glue
+    if getattr(args, "tissue_limit", None) is not None:
+        if not args.tissue_limit > 1.0:
+            raise InputError(f"--tissue-limit must be a stretch > 1 (inf: none), got {args.tissue_limit:g}")
+        more["tissue_limit"] = args.tissue_limit
     if getattr(args, "seam_elements", None) is not None:
         if not 0 <= args.seam_elements <= MAX_SEAM_ELEMENTS:
             raise InputError(f"--seam-elements must be in 0..{MAX_SEAM_ELEMENTS} (0: the face's own elements), "

@@ -177,7 +177,7 @@ class CentralDifference:
         new = self._new
         if tissue.enabled:
             ue, dhdx, vol, gamma, hgk = tissue.inputs(state.u, t, state.step)
-            jmin = self._step(ue, s.conn, dhdx, vol, gamma, hgk, s.mu, s.K, s._fe, s._jac, s._fdef, s._energy,
+            jmin = self._step(ue, s.conn, dhdx, vol, gamma, hgk, s.mu, s.K, s.ijm, s._fe, s._jac, s._fdef, s._energy,
                               False, s._ptr, s._slot, R, self._A, self._B, self._C, state.u, state.u_prev, new)
             if not jmin > 0.0:
                 s._check(state.step, t)
@@ -209,7 +209,7 @@ class CentralDifference:
         Ua, Ud, w, geo = tissue.segment(times, state.step)
         if film.params.evaporation != 0.0:
             self._Zs = np.stack([film.breaking_points(tj) for tj in times])
-        tis = (s.conn,) + tuple(geo) + (s.mu, s.K, s._fe, s._jac, s._fdef, s._energy, s._ptr, s._slot)
+        tis = (s.conn,) + tuple(geo) + (s.mu, s.K, s.ijm, s._fe, s._jac, s._fdef, s._energy, s._ptr, s._slot)
         jmin = _substep_loop(self._fast, self._ring, self._elems, state.u, new, self._x, state.fine_prev,
                              self._film_u, self._ue, self._film_R, self._G, R, self._fine, (Ua, Ud, w), tis,
                              film.rule_args(self._Z, state.saliva, h), self._Z, self._Zs, tissue.enabled)
@@ -228,14 +228,14 @@ from visemeface.physics.tled import _element_force, _node_force  # noqa: E402
 
 
 @njit(cache=True, boundscheck=False)
-def _boundary_forces(elems, rows, ue, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, energy, ptr, slot, R,
+def _boundary_forces(elems, rows, ue, conn, dhdx, vol, gamma, hgk, mu, K, ijm, fe, jac, fdef, energy, ptr, slot, R,
                      G):  # pragma: no cover - compiled
     """The elements ``elems`` (every element that holds a node of ``rows``) at ``ue``, then
     G[i] = R[n] − Σ of node n's element forces, n = rows[i]; returns their smallest J."""
     jmin = np.inf
     for k in range(elems.shape[0]):
         e = elems[k]
-        _element_force(e, ue, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, False, energy, False)
+        _element_force(e, ue, conn, dhdx, vol, gamma, hgk, mu, K, ijm, fe, jac, fdef, False, energy, False)
         if jmin > 0.0 and not jac[e] >= jmin:     # the smallest J; the first that is not > 0 (or NaN) stays
             jmin = jac[e]
     fe_flat = fe.reshape(-1, 3)
@@ -262,7 +262,7 @@ def _substep_loop(fast, ring, elems, u, new, x, xp, U, ue, Rf, G, R, coef, field
     """
     a, b, c, hold = coef
     Ua, Ud, w = field
-    conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, energy, ptr, slot = tis
+    conn, dhdx, vol, gamma, hgk, mu, K, ijm, fe, jac, fdef, energy, ptr, slot = tis
     m = w.shape[0]
     jmin = np.inf
     for i in range(fast.shape[0]):
@@ -283,7 +283,7 @@ def _substep_loop(fast, ring, elems, u, new, x, xp, U, ue, Rf, G, R, coef, field
                 n = ring[k]
                 for d in range(3):
                     ue[n, d] = U[n, d] - (Ud[n, d] * wj + Ua[n, d])
-            jm = _boundary_forces(elems, fast, ue, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, energy, ptr,
+            jm = _boundary_forces(elems, fast, ue, conn, dhdx, vol, gamma, hgk, mu, K, ijm, fe, jac, fdef, energy, ptr,
                                   slot, R, G)
             if not jm > 0.0:
                 return jm

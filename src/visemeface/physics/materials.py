@@ -1,4 +1,4 @@
-"""Compressible neo-Hookean materials for the TLED solver, and their analytic laws.
+"""Compressible neo-Hookean and Gent materials for the TLED solver, and their analytic laws.
 
 The strain energy per unit reference volume (NiftySim's, DESIGN §6) is
 
@@ -14,6 +14,12 @@ stress ``S = 2 ∂W/∂C`` is
 
     S = \\mu J^{-2/3}\\left(I - \\tfrac13 I_1 C^{-1}\\right) + K J (J - 1) C^{-1}.
 
+Gent's material (A. N. Gent, *Rubber Chem. Technol.* 69, 1996) replaces the first term by
+:math:`-\\frac{\\mu J_m}{2}\\ln\\left(1 - \\frac{\\bar I_1 - 3}{J_m}\\right)`,
+:math:`\\bar I_1 = J^{-2/3} I_1`: neo-Hookean at small strain, it stiffens without bound as
+:math:`\\bar I_1 - 3` nears :math:`J_m` (the network's limiting extensibility). Its stress is the
+neo-Hookean one with μ scaled by :math:`1 / (1 - (\\bar I_1 - 3)/J_m)`; ``jm = inf`` is neo-Hookean.
+
 Small strains give Lamé λ = K − 2μ/3 and the pressure (P-) wave speed
 ``c = sqrt((K + 4μ/3) / ρ)`` that bounds the explicit time step.
 
@@ -25,7 +31,7 @@ issue 8, …). :func:`material_table` turns the sequence into per-element arrays
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import brentq
@@ -47,18 +53,44 @@ class NeoHookean:
         Reference density ρ (kg/m³).
     name : str
         Label used in messages.
+    jm : float
+        Gent's limiting value of :math:`\\bar I_1 - 3` (module docstring); ``inf`` (the default):
+        neo-Hookean, which never stiffens.
     """
 
     mu: float
     K: float
     rho: float
     name: str = "material"
+    jm: float = float("inf")
 
     def __post_init__(self):
         for key in ("mu", "K", "rho"):
             value = getattr(self, key)
             if not (np.isfinite(value) and value > 0):
                 raise InputError(f"material {self.name!r}: {key} must be a positive number, got {value!r}")
+        if not (self.jm > 0):
+            raise InputError(f"material {self.name!r}: jm must be a positive number or inf, got {self.jm!r}")
+
+    @property
+    def ijm(self) -> float:
+        """1 / J_m (0 for neo-Hookean): what the kernels take."""
+        return 0.0 if np.isinf(self.jm) else 1.0 / self.jm
+
+    @property
+    def limiting_stretch(self) -> float:
+        """The uniaxial stretch at which an incompressible bar reaches J_m: λ² + 2/λ − 3 = J_m (inf if none)."""
+        if np.isinf(self.jm):
+            return float("inf")
+        return float(brentq(lambda s: s * s + 2.0 / s - 3.0 - self.jm, 1.0, 1e3))
+
+    def with_limiting_stretch(self, stretch: float) -> NeoHookean:
+        """This material made Gent: J_m such that an incompressible bar locks at uniaxial ``stretch``
+        (J_m = λ² + 2/λ − 3; inf: neo-Hookean)."""
+        if not stretch > 1.0:
+            raise InputError(f"material {self.name!r}: limiting stretch must be > 1, got {stretch!r}")
+        jm = float("inf") if np.isinf(stretch) else stretch * stretch + 2.0 / stretch - 3.0
+        return replace(self, jm=jm)
 
     @property
     def lame_lambda(self) -> float:
@@ -90,6 +122,14 @@ class NeoHookean:
 SOFT_TISSUE = NeoHookean(mu=800.0, K=7000.0, rho=1050.0, name="soft_tissue")
 #: The stiff saliva layer between the lips of seed 000 Table 1.
 SALIVA = NeoHookean(mu=7700.0, K=191000.0, rho=1050.0, name="saliva")
+#: A limiting uniaxial stretch for the soft tissue (Gent) to try (``--tissue-limit``; the default tissue stays
+#: seed 000's neo-Hookean). Not a measurement of lips: a bound. The neo-Hookean tissue never stiffens, so
+#: under glue 0.3 at full jaw the lip tissue beside the film stretches 7.4x (99th percentile 6.85, against
+#: 1.94 without glue) and the film, 10x stiffer in shear, never breaks (issue 16). 2.5 is the stiffest
+#: limit the explicit step holds there at the rest state's stable step (2.2, 2.0 and 1.7 bring a lip-corner
+#: element to its limit within one step). With the muscles as an active strain the tissue's reference is the
+#: muscle field's natural shape, so without glue (F_e near I) the Gent tissue is the neo-Hookean one.
+TISSUE_LIMIT = 2.5
 
 
 def material_table(materials: Sequence[NeoHookean], material_ids: np.ndarray) -> dict:
@@ -105,7 +145,7 @@ def material_table(materials: Sequence[NeoHookean], material_ids: np.ndarray) ->
     Returns
     -------
     dict of float64 arrays (e,)
-        ``mu``, ``K``, ``rho``, ``wave_speed``.
+        ``mu``, ``K``, ``rho``, ``wave_speed``, ``ijm`` (1 / J_m, 0 for neo-Hookean).
 
     Raises
     ------
@@ -128,52 +168,68 @@ def material_table(materials: Sequence[NeoHookean], material_ids: np.ndarray) ->
         "K": np.array([m.K for m in materials], dtype=np.float64),
         "rho": np.array([m.rho for m in materials], dtype=np.float64),
         "wave_speed": np.array([m.wave_speed for m in materials], dtype=np.float64),
+        "ijm": np.array([m.ijm for m in materials], dtype=np.float64),
     }
     return {k: np.ascontiguousarray(v[ids]) for k, v in table.items()}
 
 
-def second_piola_kirchhoff(F: np.ndarray, mu, K) -> np.ndarray:
-    """Neo-Hookean S for deformation gradients ``F`` (..., 3, 3).
+def gent_factor(x, ijm) -> np.ndarray:
+    """Gent's stiffening 1 / (1 − x / J_m) of the shear modulus at x = Ī₁ − 3 (``ijm`` = 1 / J_m;
+    1 for neo-Hookean); NaN at or past the limit."""
+    gi = 1.0 - np.asarray(x, dtype=np.float64) * np.asarray(ijm, dtype=np.float64)
+    with np.errstate(divide="ignore"):
+        return np.where(gi > 0.0, 1.0 / gi, np.nan)
 
-    ``S = μ J^{-2/3} (I − I₁ C⁻¹ / 3) + K J (J − 1) C⁻¹`` with C = FᵀF.
-    ``mu`` and ``K`` broadcast against the leading dimensions of F.
+
+def second_piola_kirchhoff(F: np.ndarray, mu, K, ijm=0.0) -> np.ndarray:
+    """Neo-Hookean (``ijm`` 0) or Gent (``ijm`` = 1 / J_m) S for deformation gradients ``F`` (..., 3, 3).
+
+    ``S = g μ J^{-2/3} (I − I₁ C⁻¹ / 3) + K J (J − 1) C⁻¹`` with C = FᵀF and g :func:`gent_factor`.
+    ``mu``, ``K`` and ``ijm`` broadcast against the leading dimensions of F.
     """
     F = np.asarray(F, dtype=np.float64)
     C = np.swapaxes(F, -1, -2) @ F
     J = np.linalg.det(F)
     Cinv = np.linalg.inv(C)
     I1 = np.trace(C, axis1=-2, axis2=-1)
-    mu = np.asarray(mu, dtype=np.float64)[..., None, None]
+    Jm23 = 1.0 / np.cbrt(J * J)
+    m = (np.asarray(mu, dtype=np.float64) * gent_factor(Jm23 * I1 - 3.0, ijm) * Jm23)[..., None, None]
     K = np.asarray(K, dtype=np.float64)[..., None, None]
-    Jm23 = np.cbrt(J * J)[..., None, None] ** -1.0
     eye = np.eye(3)
-    return mu * Jm23 * (eye - I1[..., None, None] / 3.0 * Cinv) + K * (J * (J - 1.0))[..., None, None] * Cinv
+    return m * (eye - I1[..., None, None] / 3.0 * Cinv) + K * (J * (J - 1.0))[..., None, None] * Cinv
 
 
-def cauchy_stress(F: np.ndarray, mu, K) -> np.ndarray:
+def cauchy_stress(F: np.ndarray, mu, K, ijm=0.0) -> np.ndarray:
     """Cauchy stress σ = F S Fᵀ / J for deformation gradients (..., 3, 3)."""
     F = np.asarray(F, dtype=np.float64)
-    S = second_piola_kirchhoff(F, mu, K)
+    S = second_piola_kirchhoff(F, mu, K, ijm)
     J = np.linalg.det(F)[..., None, None]
     return F @ S @ np.swapaxes(F, -1, -2) / J
 
 
-def strain_energy_density(F: np.ndarray, mu, K) -> np.ndarray:
-    """W = μ/2 (J^{-2/3} I₁ − 3) + K/2 (J − 1)² per unit reference volume."""
+def strain_energy_density(F: np.ndarray, mu, K, ijm=0.0) -> np.ndarray:
+    """W = μ/2 (Ī₁ − 3) + K/2 (J − 1)² per unit reference volume, Ī₁ = J^{-2/3} I₁; with ``ijm`` = 1 / J_m > 0
+    Gent's −μ J_m/2 ln(1 − (Ī₁ − 3)/J_m) in place of the first term."""
     F = np.asarray(F, dtype=np.float64)
     J = np.linalg.det(F)
-    I1 = np.einsum("...ij,...ij->...", F, F)
-    return 0.5 * np.asarray(mu) * (I1 / np.cbrt(J * J) - 3.0) + 0.5 * np.asarray(K) * (J - 1.0) ** 2
+    x = np.einsum("...ij,...ij->...", F, F) / np.cbrt(J * J) - 3.0
+    ijm = np.asarray(ijm, dtype=np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        iso = np.where(ijm == 0.0, 0.5 * x, -0.5 / ijm * np.log1p(-x * ijm))
+    return np.asarray(mu) * iso + 0.5 * np.asarray(K) * (J - 1.0) ** 2
 
 
-def _lateral_residual(lt, stretch, mu, K):
+def _lateral_residual(lt, stretch, mu, K, ijm=0.0):
     J = stretch * lt * lt
     I1 = 2.0 * lt * lt + stretch * stretch
-    return mu * J ** (-5.0 / 3.0) * (lt * lt - I1 / 3.0) + K * (J - 1.0)
+    g = gent_factor(I1 / np.cbrt(J * J) - 3.0, ijm)
+    if np.isnan(g):              # past Gent's limit the stress tends to ±∞, the sign of λₜ² − I₁/3, of λₜ − λ
+        return float(np.copysign(1e300, lt - stretch))
+    return g * mu * J ** (-5.0 / 3.0) * (lt * lt - I1 / 3.0) + K * (J - 1.0)
 
 
 def uniaxial_stress(stretch, material: NeoHookean) -> tuple[np.ndarray, np.ndarray]:
-    """Analytic uniaxial-stress response of the compressible neo-Hookean bar.
+    """Analytic uniaxial-stress response of the compressible neo-Hookean (or Gent) bar.
 
     For an axial stretch λ the lateral stretch λₜ makes the lateral Cauchy
     stress vanish,
@@ -181,8 +237,8 @@ def uniaxial_stress(stretch, material: NeoHookean) -> tuple[np.ndarray, np.ndarr
     .. math:: \\mu J^{-5/3}\\left(\\lambda_t^2 - \\tfrac13 I_1\\right) + K (J - 1) = 0,
               \\quad J = \\lambda \\lambda_t^2,\\; I_1 = \\lambda^2 + 2\\lambda_t^2,
 
-    (solved by Brent's method) and the nominal (first Piola–Kirchhoff) axial
-    stress, force per reference area, is
+    (solved by Brent's method; μ times :func:`gent_factor` for a Gent material) and the
+    nominal (first Piola–Kirchhoff) axial stress, force per reference area, is
 
     .. math:: P = \\lambda_t^2 \\left[\\mu J^{-5/3}\\left(\\lambda^2 - \\tfrac13 I_1\\right) + K (J - 1)\\right].
 
@@ -212,10 +268,11 @@ def uniaxial_stress(stretch, material: NeoHookean) -> tuple[np.ndarray, np.ndarr
         if s == 1.0:
             lts[i] = 1.0
             continue
-        lts[i] = brentq(_lateral_residual, 1e-6, 1e3, args=(s, material.mu, material.K),
+        lts[i] = brentq(_lateral_residual, 1e-6, 1e3, args=(s, material.mu, material.K, material.ijm),
                         xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200)
     lt = lts.reshape(lam.shape)
     J = lam * lt * lt
     I1 = lam * lam + 2.0 * lt * lt
-    sigma = material.mu * J ** (-5.0 / 3.0) * (lam * lam - I1 / 3.0) + material.K * (J - 1.0)
+    g = gent_factor(I1 / np.cbrt(J * J) - 3.0, material.ijm)
+    sigma = g * material.mu * J ** (-5.0 / 3.0) * (lam * lam - I1 / 3.0) + material.K * (J - 1.0)
     return sigma * lt * lt, lt

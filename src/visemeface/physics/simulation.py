@@ -67,6 +67,8 @@ class PhysicsSettings:
     ``threads``: numba threads for the steps; None (the default) times a few steps at numba's thread count
     and at one, at the start and every :data:`THREAD_CHECK_SECONDS` of simulated time, and runs on the
     faster (:func:`~visemeface.runtime.faster_thread_count`; the result is the same bits at any count).
+    ``tissue_limit``: the soft tissue's limiting uniaxial stretch (Gent; inf, the default: the seed's
+    neo-Hookean tissue), see :attr:`tissue`.
     ``seam_elements``: where the FEM face is built here from a face (:func:`physics_face`, the speech
     commands), its lips are refined to this many tissue elements along the seam
     (:func:`~visemeface.physics.face_model.build_fem_face`); None: the face's own elements.
@@ -94,6 +96,14 @@ class PhysicsSettings:
     threads: int | None = None
     multirate: bool = True
     seam_elements: int | None = None
+    tissue_limit: float = float("inf")
+
+    @property
+    def tissue(self):
+        """The soft tissue's material: seed 000's neo-Hookean ``SOFT_TISSUE``, made Gent with limiting
+        uniaxial stretch ``tissue_limit`` where that is finite (e.g. :data:`~visemeface.physics.materials.TISSUE_LIMIT`)."""
+        from visemeface.physics.materials import SOFT_TISSUE
+        return SOFT_TISSUE if np.isinf(self.tissue_limit) else SOFT_TISSUE.with_limiting_stretch(self.tissue_limit)
 
     @classmethod
     def speech(cls, **changes) -> PhysicsSettings:
@@ -108,6 +118,8 @@ class PhysicsSettings:
         runs on into the mouth corners (``film_corners``), where the lips meet: ended at the last
         pair of lip vertices it leaves the corners unglued, and they open as dark notches while the
         rest of the seam is stuck (on /f v/ and wide vowels in speech, and beside a held centre).
+        The tissue stays neo-Hookean (``tissue_limit`` inf): a limiting stretch lets a strong glue go
+        at full jaw, but shortens the first /b/ of "Bob moves five boats" to 2 frames (issue 16's figures).
         """
         from visemeface.face.refine import SEAM_ELEMENTS
         from visemeface.physics.saliva import RUPTURE_TIME
@@ -145,6 +157,8 @@ def _check_settings(physics: str, settings: PhysicsSettings) -> None:
         raise InputError(f"posture spring frequency must be >= 0, got {settings.posture_hz}")
     if settings.muscles not in ("active", "loads"):
         raise InputError(f"muscles must be 'active' or 'loads', got {settings.muscles!r}")
+    if not settings.tissue_limit > 1.0:
+        raise InputError(f"tissue limiting stretch must be > 1 (inf: neo-Hookean), got {settings.tissue_limit!r}")
     if settings.lip_bone not in ("free", "muscle"):
         raise InputError(f"lip_bone must be 'free' or 'muscle', got {settings.lip_bone!r}")
     if settings.threads is not None:
@@ -170,17 +184,18 @@ def build_model(fem, drive, film, settings: PhysicsSettings, dt: float, substeps
     from visemeface.physics import terms as T
     from visemeface.physics.hexmesh import HexMesh
     from visemeface.physics.integrator import FaceModel
-    from visemeface.physics.materials import SALIVA, SOFT_TISSUE
+    from visemeface.physics.materials import SALIVA
     from visemeface.physics.tled import TLEDSolver
 
     mesh = fem.mesh
+    tissue_law = settings.tissue
     # The whole mesh (tissue and the saliva hexahedra the film refines) once, for the lumped
     # masses (the saliva hexahedra are no TLED elements: the film's stable step is in
     # StickySimulation.stability); the tissue alone for the step's forces.
-    whole = TLEDSolver(mesh, [SOFT_TISSUE, SALIVA], dt=1e-12, damping=settings.damping,
+    whole = TLEDSolver(mesh, [tissue_law, SALIVA], dt=1e-12, damping=settings.damping,
                        hourglass_kappa=settings.hourglass_kappa)
     tissue_mesh = HexMesh(mesh.nodes, mesh.hexes[fem.tissue], material=np.zeros(len(fem.tissue), np.int64))
-    tissue = TLEDSolver(tissue_mesh, SOFT_TISSUE, dt=dt, damping=settings.damping,
+    tissue = TLEDSolver(tissue_mesh, tissue_law, dt=dt, damping=settings.damping,
                         hourglass_kappa=settings.hourglass_kappa)
     free = np.ones((mesh.n_nodes, 3))
     free[drive.fixed_nodes] = 0.0
@@ -257,10 +272,9 @@ class StickySimulation:
         self.stability = face_stable_step(mesh, fem.tissue, self.film, hourglass_kappa=settings.hourglass_kappa)
         film_dt = self.stability["dt"]
         from visemeface.physics.hexmesh import HexMesh
-        from visemeface.physics.materials import SOFT_TISSUE
         from visemeface.physics.tled import TLEDSolver
         loads = TLEDSolver(HexMesh(mesh.nodes, mesh.hexes[fem.tissue], material=np.zeros(len(fem.tissue), np.int64)),
-                           SOFT_TISSUE, dt=film_dt, hourglass_kappa=settings.hourglass_kappa)
+                           settings.tissue, dt=film_dt, hourglass_kappa=settings.hourglass_kappa)
         self.drive = FaceDrive(fem, rig, self.values, self.fps, loads.internal_forces,
                                field_smoothing=settings.field_smoothing, min_jacobian=settings.min_jacobian,
                                lip_bone=settings.lip_bone)
@@ -428,7 +442,8 @@ class StickySimulation:
             h.update(np.ascontiguousarray(arr).tobytes())
         s = self.settings
         h.update(repr((self.physics, self.fps, self.dt, self.substeps, s.damping, s.hourglass_kappa, s.saliva, s.posture_hz,
-                       tuple(s.off), s.film_elements, s.film_corners, s.lip_bone, s.muscles, s.field_smoothing, s.min_jacobian)).encode())
+                       tuple(s.off), s.film_elements, s.film_corners, s.lip_bone, s.muscles, s.field_smoothing, s.min_jacobian,
+                       s.tissue_limit)).encode())
         return h.hexdigest()[:16]
 
 

@@ -76,7 +76,7 @@ class Tissue(Term):
             s._fe[:] = 0.0
             return
         ue, dhdx, vol, gamma, hgk = self.inputs(u, t, step)
-        s._elem_kernel(ue, s.conn, dhdx, vol, gamma, hgk, s.mu, s.K, s._fe, s._jac, s._fdef, False,
+        s._elem_kernel(ue, s.conn, dhdx, vol, gamma, hgk, s.mu, s.K, s.ijm, s._fe, s._jac, s._fdef, False,
                        s._energy, False)
 
 

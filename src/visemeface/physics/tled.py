@@ -248,7 +248,7 @@ def _inv_cbrt(J):  # pragma: no cover - compiled
 
 
 @njit(inline="always", error_model="numpy", fastmath=_FASTMATH)
-def _element_force(e, u, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, store_f, energy, want_energy):  # pragma: no cover - compiled
+def _element_force(e, u, conn, dhdx, vol, gamma, hgk, mu, K, ijm, fe, jac, fdef, store_f, energy, want_energy):  # pragma: no cover - compiled
     """Forces of element e into fe[e] (and J, X, energy): the body of the element loop.
 
     Straight-line scalar code: no array is allocated, so the parallel loop
@@ -320,13 +320,17 @@ def _element_force(e, u, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, stor
     w21 = x02 * x10 - x00 * x12
     w22 = x00 * x11 - x01 * x10
     J = x00 * w00 + x01 * w01 + x02 * w02
-    jac[e] = J
     I1 = (x00 * x00 + x01 * x01 + x02 * x02 + x10 * x10 + x11 * x11 + x12 * x12
           + x20 * x20 + x21 * x21 + x22 * x22)
     y = _inv_cbrt(J)
     Jm23 = y * y
     V = vol[e]
-    m = mu[e] * Jm23
+    x = Jm23 * I1 - 3.0                       # Ī₁ − 3; Gent's μ_eff = μ / (1 − x / J_m), ijm = 1 / J_m
+    gi = 1.0 - x * ijm[e]
+    # at or past the limiting stretch there is no finite stress: -inf is the divergence check's sign for it
+    # (a select, not a branch around a store, so the element loop still vectorises)
+    jac[e] = -np.inf if gi <= 0.0 else J
+    m = mu[e] * Jm23 / gi
     am = V * m
     bm = V * (K[e] * J * (J - 1.0) - m * I1 / 3.0) / J
     p00 = am * x00 + bm * w00
@@ -375,21 +379,22 @@ def _element_force(e, u, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, stor
     if want_energy:
         hg = (q00 * q00 + q01 * q01 + q02 * q02 + q10 * q10 + q11 * q11 + q12 * q12
               + q20 * q20 + q21 * q21 + q22 * q22 + q30 * q30 + q31 * q31 + q32 * q32)
-        energy[e] = V * (0.5 * mu[e] * (Jm23 * I1 - 3.0) + 0.5 * K[e] * (J - 1.0) * (J - 1.0)) + 0.5 * k * hg
+        iso = 0.5 * mu[e] * x if ijm[e] == 0.0 else -0.5 * mu[e] / ijm[e] * np.log(gi)
+        energy[e] = V * (iso + 0.5 * K[e] * (J - 1.0) * (J - 1.0)) + 0.5 * k * hg
 
 
 @njit(**_KERNEL)
-def _element_forces_nb(u, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, store_f, energy, want_energy):  # pragma: no cover - compiled
+def _element_forces_nb(u, conn, dhdx, vol, gamma, hgk, mu, K, ijm, fe, jac, fdef, store_f, energy, want_energy):  # pragma: no cover - compiled
     """Element forces, elements split over numba's threads (race-free: one writer per element)."""
     for e in prange(conn.shape[0]):
-        _element_force(e, u, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, store_f, energy, want_energy)
+        _element_force(e, u, conn, dhdx, vol, gamma, hgk, mu, K, ijm, fe, jac, fdef, store_f, energy, want_energy)
 
 
 @njit(**_SERIAL)
-def _element_forces_serial(u, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, store_f, energy, want_energy):  # pragma: no cover - compiled
+def _element_forces_serial(u, conn, dhdx, vol, gamma, hgk, mu, K, ijm, fe, jac, fdef, store_f, energy, want_energy):  # pragma: no cover - compiled
     """Element forces on one thread: small meshes, where thread start-up dominates."""
     for e in range(conn.shape[0]):
-        _element_force(e, u, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, store_f, energy, want_energy)
+        _element_force(e, u, conn, dhdx, vol, gamma, hgk, mu, K, ijm, fe, jac, fdef, store_f, energy, want_energy)
 
 
 @njit(inline="always", error_model="numpy", fastmath=_FASTMATH)
@@ -444,7 +449,7 @@ def _min_jacobian(jac):  # pragma: no cover - compiled
 
 
 @njit(**_KERNEL)
-def _step_nb(ue, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, energy, want_energy, ptr, slot, R, A, B, C,
+def _step_nb(ue, conn, dhdx, vol, gamma, hgk, mu, K, ijm, fe, jac, fdef, energy, want_energy, ptr, slot, R, A, B, C,
              u, uprev, unew):  # pragma: no cover - compiled
     """One whole step in one call: element forces of ``ue`` (elements over threads), then gather and
     central difference (nodes over threads); returns the smallest J.
@@ -455,7 +460,7 @@ def _step_nb(ue, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, energy, want
     elements see (``u``, or ``u`` minus the active strain's field); ``u`` is integrated.
     """
     for e in prange(conn.shape[0]):
-        _element_force(e, ue, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, False, energy, want_energy)
+        _element_force(e, ue, conn, dhdx, vol, gamma, hgk, mu, K, ijm, fe, jac, fdef, False, energy, want_energy)
     fe_flat = fe.reshape(-1, 3)
     for n in prange(u.shape[0]):
         _integrate_node(n, fe_flat, ptr, slot, R, A, B, C, u, uprev, unew)
@@ -463,11 +468,11 @@ def _step_nb(ue, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, energy, want
 
 
 @njit(**_SERIAL)
-def _step_serial(ue, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, energy, want_energy, ptr, slot, R, A, B, C,
+def _step_serial(ue, conn, dhdx, vol, gamma, hgk, mu, K, ijm, fe, jac, fdef, energy, want_energy, ptr, slot, R, A, B, C,
                  u, uprev, unew):  # pragma: no cover - compiled
     """:func:`_step_nb` on one thread."""
     for e in range(conn.shape[0]):
-        _element_force(e, ue, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, False, energy, want_energy)
+        _element_force(e, ue, conn, dhdx, vol, gamma, hgk, mu, K, ijm, fe, jac, fdef, False, energy, want_energy)
     fe_flat = fe.reshape(-1, 3)
     for n in range(u.shape[0]):
         _integrate_node(n, fe_flat, ptr, slot, R, A, B, C, u, uprev, unew)
@@ -485,7 +490,7 @@ def _gather_nb(fe_flat, ptr, slot, out):  # pragma: no cover - compiled
 # numpy reference of the same kernels
 # ---------------------------------------------------------------------------
 
-def _element_forces_np(u, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, store_f, energy,
+def _element_forces_np(u, conn, dhdx, vol, gamma, hgk, mu, K, ijm, fe, jac, fdef, store_f, energy,
                        want_energy):
     ue = u[conn]                                                    # (e, 8, 3)
     X = np.eye(3) + np.einsum("eai,eaj->eij", ue, dhdx)
@@ -494,16 +499,22 @@ def _element_forces_np(u, conn, dhdx, vol, gamma, hgk, mu, K, fe, jac, fdef, sto
     Cinv = np.linalg.inv(C)
     I1 = np.trace(C, axis1=1, axis2=2)
     Jm23 = 1.0 / np.cbrt(J * J)
-    m = (mu * Jm23)[:, None, None]
-    S = m * np.eye(3) + (K * J * (J - 1.0) - mu * Jm23 * I1 / 3.0)[:, None, None] * Cinv
+    x = Jm23 * I1 - 3.0
+    gi = 1.0 - x * ijm
+    jac_bad = gi <= 0.0
+    gi = np.where(jac_bad, 1.0, gi)
+    m = mu * Jm23 / gi
+    S = m[:, None, None] * np.eye(3) + (K * J * (J - 1.0) - m * I1 / 3.0)[:, None, None] * Cinv
     P = vol[:, None, None] * (X @ S)
     q = np.einsum("eak,eai->eki", gamma, ue)                        # (e, 4, 3)
     fe[:] = np.einsum("eij,eaj->eai", P, dhdx) + hgk[:, None, None] * np.einsum("eak,eki->eai", gamma, q)
-    jac[:] = J
+    jac[:] = np.where(jac_bad, -np.inf, J)
     if store_f:
         fdef[:] = X
     if want_energy:
-        energy[:] = (vol * (0.5 * mu * (Jm23 * I1 - 3.0) + 0.5 * K * (J - 1.0) ** 2)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            iso = np.where(ijm == 0.0, 0.5 * mu * x, -0.5 * mu / ijm * np.log(gi))
+        energy[:] = (vol * (iso + 0.5 * K * (J - 1.0) ** 2)
                      + 0.5 * hgk * np.einsum("eki,eki->e", q, q))
 
 
@@ -632,6 +643,8 @@ class TLEDSolver:
 
         mat = material_table(materials, mesh.material)
         self.mu, self.K, self.rho = mat["mu"], mat["K"], mat["rho"]
+        #: 1 / J_m per element (Gent's limiting Ī₁ − 3; 0: neo-Hookean).
+        self.ijm = mat["ijm"]
         self.conn = np.ascontiguousarray(mesh.hexes, dtype=np.int64)
         if gradient not in ("uniform", "centre"):
             raise InputError(f"unknown gradient rule {gradient!r}; use 'uniform' or 'centre'")
@@ -741,7 +754,7 @@ class TLEDSolver:
 
     def _element_forces(self, u: np.ndarray, want_energy: bool, conn=None) -> None:
         self._elem_kernel(u, self.conn if conn is None else conn, self.dhdx, self.force_volume, self.gamma, self.hourglass_stiffness,
-                          self.mu, self.K, self._fe, self._jac, self._fdef, self.element_hook is not None,
+                          self.mu, self.K, self.ijm, self._fe, self._jac, self._fdef, self.element_hook is not None,
                           self._energy, want_energy)
 
     def internal_forces(self, u: np.ndarray) -> np.ndarray:
@@ -769,7 +782,7 @@ class TLEDSolver:
 
         ue = np.asarray(u, dtype=np.float64)[self.conn]
         F = np.eye(3) + np.einsum("eai,eaj->eij", ue, self.dhdx)
-        S = second_piola_kirchhoff(F, self.mu, self.K)
+        S = second_piola_kirchhoff(F, self.mu, self.K, self.ijm)
         J = np.linalg.det(F)
         return {"F": F, "J": J, "S": S, "cauchy": F @ S @ np.swapaxes(F, 1, 2) / J[:, None, None]}
 
@@ -781,7 +794,9 @@ class TLEDSolver:
         bad = np.flatnonzero(~(self._jac > 0) | ~np.isfinite(self._jac))
         e = int(bad[0])
         J = self._jac[e]
-        what = "a non-finite deformation (NaN/inf displacement)" if not np.isfinite(J) else f"J = {J:.4g} <= 0 (inverted)"
+        what = ("reached the tissue's limiting stretch (Gent's J_m)" if J == -np.inf
+                else "a non-finite deformation (NaN/inf displacement)" if not np.isfinite(J)
+                else f"J = {J:.4g} <= 0 (inverted)")
         raise SimulationDiverged(
             f"simulation diverged at step {step} (t = {t:.6g} s): element {e} "
             f"(nodes {self.conn[e].tolist()}) has {what}; {len(bad)} element(s) affected. "
@@ -889,7 +904,7 @@ class TLEDSolver:
             if fused:                          # the whole step in one compiled call (see _step_nb)
                 R = self._external(t, o)
                 jmin = self._step_kernel(u, o.conn, self.dhdx, self.force_volume, self.gamma,
-                                         self.hourglass_stiffness, self.mu, self.K, self._fe, self._jac,
+                                         self.hourglass_stiffness, self.mu, self.K, self.ijm, self._fe, self._jac,
                                          self._fdef, self._energy, output, o.ptr, o.slot, R, o.A, o.B, o.C,
                                          u, u_prev, u_new)
                 if not jmin > 0.0:
