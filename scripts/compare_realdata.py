@@ -21,7 +21,8 @@ For every GRID clip in the realdata folder (default ``../shared/realdata``; see 
 power-law exponent), and the medians over the openings that last ``RELEASE_RUN`` frames or more.
 
 Run: ``python scripts/compare_realdata.py [--realdata DIR] [--timing align|grid] [--physics sticky|elastic]
-[--out DIR] [--per-phone] [--releases]`` (``--physics``: the FEM face instead of the kinematic one).
+[--out DIR] [--per-phone] [--releases] [--tissue-limit L]`` (``--physics``: the FEM face instead of the kinematic
+one).
 
 The GRID clips are the GRID corpus's (Cooke, Barker, Cunningham & Shao, JASA 120:2421, 2006).
 """
@@ -90,9 +91,10 @@ def extract_audio(video: Path, wav: Path) -> None:
                     "-ar", "16000", str(wav)], check=True)
 
 
-def synthetic_profile(segments, fps: float, n_frames: int, detector, physics: str | None = None):
+def synthetic_profile(segments, fps: float, n_frames: int, detector, physics: str | None = None,
+                      tissue_limit: float = float("inf")):
     """Render the default face along the segments (kinematic, or the FEM face with ``physics`` sticky or
-    elastic as ``speak --physics`` runs it) and analyse it: the profile."""
+    elastic as ``speak --physics [--tissue-limit]`` runs it) and analyse it: the profile."""
     from visemeface.analysis.profiles import analyze_frames
     from visemeface.motion import KinematicMotion
     from visemeface.muscles.rig import default_rig
@@ -106,7 +108,9 @@ def synthetic_profile(segments, fps: float, n_frames: int, detector, physics: st
         motion = KinematicMotion(rig, track)
     else:
         from visemeface.animate import simulated_motion
-        motion = simulated_motion(rig, track, physics)          # the speech commands' FEM face
+        from visemeface.physics.drive import PhysicsSettings
+        motion = simulated_motion(rig, track, physics,          # the speech commands' FEM face
+                                  PhysicsSettings.speech(tissue_limit=tissue_limit))
     with Renderer(motion.render_face, size=(256, 256), view="mouth") as renderer:
         box = renderer.mouth_box()
         frames = [renderer.render(f.vertices) for f in motion.frames()][:n_frames]
@@ -224,6 +228,8 @@ def main() -> int:
     ap.add_argument("--out", type=Path, help="also write <clip>_real.csv, <clip>_synth.csv, <clip>.png here")
     ap.add_argument("--physics", choices=("sticky", "elastic"),
                     help="animate the FEM face (default: the kinematic face)")
+    ap.add_argument("--tissue-limit", type=float, default=float("inf"),
+                    help="with --physics: the tissue's limiting stretch (Gent; default none, as speak's)")
     ap.add_argument("--per-phone", action="store_true",
                     help="also print the mean opening height per aligned phone, real vs ours")
     ap.add_argument("--releases", action="store_true",
@@ -251,12 +257,13 @@ def main() -> int:
         text = grid_sentence(clip)
         real, fps, n = real_profile(video, detector)
         segments, timing = timed_segments(video, text, args.timing, n / fps)
-        synth = synthetic_profile(segments, fps, n, detector, args.physics)
+        synth = synthetic_profile(segments, fps, n, detector, args.physics, args.tissue_limit)
         d = l2_distance(real, synth)
         c = correlation(real, synth, max_lag=5)
         sp = speech_correlation(real, synth, video)
         rows += phone_heights(real, synth, segments, sp["span_s"])
-        print(json.dumps({"clip": clip, "text": text, "timing": timing, "physics": args.physics, "frames": n,
+        limit = {"tissue_limit": args.tissue_limit} if args.physics and args.tissue_limit < float("inf") else {}
+        print(json.dumps({"clip": clip, "text": text, "timing": timing, "physics": args.physics, **limit, "frames": n,
                           "open_frames_real": int((real["count"] > 0).sum()),
                           "open_frames_synth": int((synth["count"] > 0).sum()),
                           "l2": {k: round(v, 4) for k, v in d.items()},
