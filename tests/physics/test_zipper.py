@@ -290,7 +290,8 @@ def test_glue_0_3_at_full_jaw_holds_the_speech_lips_because_their_tissue_never_s
     """Issue 16's glue 0.3 on the speech lips, measured to its cause. With the seed's neo-Hookean tissue
     the film holds at full jaw: not one slab breaks, while the lip tissue beside it stretches several-fold
     (it gives instead of the film, 10x stiffer in shear). A tissue that stiffens toward a limiting stretch
-    (Gent, ``tissue_limit`` 2.5) carries the load into the film, and nearly all of it breaks, from the centre."""
+    (Gent, ``tissue_limit`` 2.5) carries the load into the film, and every slab along the seam breaks (the
+    two wedges into the corners, where the lips meet, hold: measured 1.195 against their 1.30)."""
     from visemeface.face.procedural import default_face
     from visemeface.physics.materials import TISSUE_LIMIT
     from visemeface.runtime import set_threads
@@ -303,9 +304,9 @@ def test_glue_0_3_at_full_jaw_holds_the_speech_lips_because_their_tissue_never_s
             glue=0.3, tissue_limit=limit, threads=1))
         for _ in sim.frames():
             pass
-        broken[limit] = sim.broken.mean()
-    assert broken[float("inf")] == 0.0
-    assert broken[TISSUE_LIMIT] >= 0.9
+        broken[limit] = (sim.broken[sim.seam_slabs].mean(), sim.broken[sim.seam_slabs.stop:].mean())
+    assert broken[float("inf")] == (0.0, 0.0)
+    assert broken[TISSUE_LIMIT][0] == 1.0          # every slab along the seam; the corner wedges may hold
 
 
 @pytest.mark.slow
