@@ -242,6 +242,9 @@ def main() -> int:
     from visemeface.analysis.profiles import correlation, l2_distance, plot_profiles, shifted_profile, \
         write_profile
 
+    if args.tissue_limit < float("inf") and not args.physics:
+        print("compare_realdata: --tissue-limit needs --physics sticky or elastic", file=sys.stderr)
+        return 2
     videos = sorted(args.realdata.glob("*.mpg"))
     if not videos:
         print(f"compare_realdata: no GRID clip (*.mpg) in {args.realdata} (--realdata: the folder of "

@@ -495,7 +495,8 @@ def test_gent_is_neo_hookean_times_its_stiffening_and_its_energy_is_the_stress_p
 def test_gent_bar_stiffens_toward_its_limit_and_matches_neo_hookean_at_small_stretch():
     small, _ = uniaxial_stress(1.05, GENT)
     assert small == pytest.approx(uniaxial_stress(1.05, SOFT_TISSUE)[0], rel=0.02)
-    # the tissue is compressible (ν 0.45): its bar thins less than an incompressible one and locks past 2.5
+    # the limit is on the isochoric stretch; the tissue is compressible (ν 0.45), so its bar swells, never quite
+    # locks, and stiffens steeply past 2.5
     ratio = [uniaxial_stress(s, GENT)[0] / uniaxial_stress(s, SOFT_TISSUE)[0] for s in (1.5, 2.0, 2.5, 2.9)]
     assert all(b > a for a, b in zip(ratio, ratio[1:])) and ratio[0] < 1.2 and ratio[-1] > 5
     # A bar held at stretch 2 by a dead load comes to rest there (dynamic relaxation of the TLED bar).
@@ -524,3 +525,20 @@ def test_an_element_at_the_limiting_stretch_stops_the_run_saying_so():
         SOFT_TISSUE.with_limiting_stretch(0.9)
     with pytest.raises(InputError, match="jm must be a positive"):
         NeoHookean(800.0, 7000.0, 1050.0, jm=0.0)
+
+
+def test_forces_past_the_limit_are_refused_not_made_up():
+    """Past the limit there is no finite stress: the kernels give NaN forces (numba and numpy alike), and
+    ``internal_forces`` (the muscle loads' path) says so instead of returning numbers; an inverted element
+    is still reported as inverted, not as the limit."""
+    m = box_mesh((1, 1, 1), (0.01, 0.01, 0.01))
+    u = m.nodes * (np.array([3.0, 3 ** -0.5, 3 ** -0.5]) - 1.0)
+    for backend in ("numba", "numpy"):
+        solver = TLEDSolver(m, GENT, dt=1e-5, backend=backend)
+        with pytest.raises(InputError, match="at or past the tissue's limiting stretch"):
+            solver.internal_forces(u)
+        assert np.isnan(solver._fe).all() and solver._jac[0] == -np.inf
+    inverted = m.nodes * np.array([-1.05, 0.0, 0.0])                 # x -> -0.05 x: J = -0.05
+    solver = TLEDSolver(m, GENT, dt=1e-5, prescribed=[(np.arange(m.n_nodes), lambda t: inverted)])
+    with pytest.raises(SimulationDiverged, match="inverted"):
+        next(iter(solver.run(1)))

@@ -33,7 +33,8 @@ over 0.03 s before they snap, and the film runs into the mouth corners (issue 16
 --seam-elements 0 --rupture-time 0 --no-film-corners: the seed's mesh and brittle
 film, which parts in one frame). The tissue is the seed's neo-Hookean, which never
 stiffens: under a strong glue (0.3) at full jaw the lips stretch 7x and hold.
---tissue-limit 2.5 stiffens it toward that stretch (Gent) and the glue lets go.
+With --tissue-limit 2.5 it stiffens without bound toward a stretch of 2.5 (Gent)
+and the glue lets go.
 
 Writes OUTPUT (MP4) and OUTPUT's stem + .saliva.csv (--csv; per frame: time,
 jaw, broken fraction of the film along the seam, number and span of openings

@@ -18,7 +18,7 @@ without saliva, its equilibrium is that posture:
    .. math:: \\mathbf f(\\mathbf a) = \\mathbf F_{int}^{tissue}\\big(U(\\mathbf a)\\big),
 
    the rig's Waters displacement fields turned into force fields through the
-   tissue's own (nonlinear, neo-Hookean) stiffness: with these loads and the
+   tissue's own (nonlinear: neo-Hookean, or Gent with a limiting stretch) stiffness: with these loads and the
    jaw the static balance F_int(u) = f holds at u = U(**a**). Nothing holds the
    lips to that posture: they reach it, or not, by the FEM
    (:mod:`visemeface.physics.simulation`).

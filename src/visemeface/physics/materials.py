@@ -79,14 +79,16 @@ class NeoHookean:
 
     @property
     def limiting_stretch(self) -> float:
-        """The uniaxial stretch at which an incompressible bar reaches J_m: λ² + 2/λ − 3 = J_m (inf if none)."""
+        """The isochoric uniaxial stretch at which Ī₁ − 3 reaches J_m: λ² + 2/λ − 3 = J_m (inf if none)."""
         if np.isinf(self.jm):
             return float("inf")
-        return float(brentq(lambda s: s * s + 2.0 / s - 3.0 - self.jm, 1.0, 1e3))
+        return float(brentq(lambda s: s * s + 2.0 / s - 3.0 - self.jm, 1.0, np.sqrt(self.jm + 3.0) + 1.0))
 
     def with_limiting_stretch(self, stretch: float) -> NeoHookean:
-        """This material made Gent: J_m such that an incompressible bar locks at uniaxial ``stretch``
-        (J_m = λ² + 2/λ − 3; inf: neo-Hookean)."""
+        """This material made Gent: J_m such that it locks at isochoric uniaxial stretch ``stretch``
+        (J_m = λ² + 2/λ − 3 for λ = the stretch with the volume change taken out, J^(-1/3) λ_axial: an
+        incompressible bar's own stretch; a compressible bar swells and stiffens without locking, e.g. the
+        soft tissue with 2.5 carries 2.9x the neo-Hookean stress at stretch 2.5, 6.5x at 3; inf: neo-Hookean)."""
         if not stretch > 1.0:
             raise InputError(f"material {self.name!r}: limiting stretch must be > 1, got {stretch!r}")
         jm = float("inf") if np.isinf(stretch) else stretch * stretch + 2.0 / stretch - 3.0
@@ -122,7 +124,7 @@ class NeoHookean:
 SOFT_TISSUE = NeoHookean(mu=800.0, K=7000.0, rho=1050.0, name="soft_tissue")
 #: The stiff saliva layer between the lips of seed 000 Table 1.
 SALIVA = NeoHookean(mu=7700.0, K=191000.0, rho=1050.0, name="saliva")
-#: A limiting uniaxial stretch for the soft tissue (Gent) to try (``--tissue-limit``; the default tissue stays
+#: A limiting (isochoric, uniaxial) stretch for the soft tissue (Gent) to try (``--tissue-limit``; the default tissue stays
 #: seed 000's neo-Hookean). Not a measurement of lips: a bound. The neo-Hookean tissue never stiffens, so
 #: under glue 0.3 at full jaw the lip tissue beside the film stretches 7.4x (99th percentile 6.85, against
 #: 1.94 without glue) and the film, 10x stiffer in shear, never breaks (issue 16). 2.5 is the stiffest

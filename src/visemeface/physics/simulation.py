@@ -13,6 +13,7 @@ unless ``posture_hz`` is asked for, and then it acts on every free node alike.
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -67,7 +68,7 @@ class PhysicsSettings:
     ``threads``: numba threads for the steps; None (the default) times a few steps at numba's thread count
     and at one, at the start and every :data:`THREAD_CHECK_SECONDS` of simulated time, and runs on the
     faster (:func:`~visemeface.runtime.faster_thread_count`; the result is the same bits at any count).
-    ``tissue_limit``: the soft tissue's limiting uniaxial stretch (Gent; inf, the default: the seed's
+    ``tissue_limit``: the soft tissue's limiting (isochoric) stretch (Gent; inf, the default: the seed's
     neo-Hookean tissue), see :attr:`tissue`.
     ``seam_elements``: where the FEM face is built here from a face (:func:`physics_face`, the speech
     commands), its lips are refined to this many tissue elements along the seam
@@ -100,8 +101,7 @@ class PhysicsSettings:
 
     @property
     def tissue(self):
-        """The soft tissue's material: seed 000's neo-Hookean ``SOFT_TISSUE``, made Gent with limiting
-        uniaxial stretch ``tissue_limit`` where that is finite (e.g. :data:`~visemeface.physics.materials.TISSUE_LIMIT`)."""
+        """The soft tissue: seed 000's neo-Hookean ``SOFT_TISSUE``, Gent where ``tissue_limit`` is finite."""
         from visemeface.physics.materials import SOFT_TISSUE
         return SOFT_TISSUE if np.isinf(self.tissue_limit) else SOFT_TISSUE.with_limiting_stretch(self.tissue_limit)
 
@@ -157,7 +157,7 @@ def _check_settings(physics: str, settings: PhysicsSettings) -> None:
         raise InputError(f"posture spring frequency must be >= 0, got {settings.posture_hz}")
     if settings.muscles not in ("active", "loads"):
         raise InputError(f"muscles must be 'active' or 'loads', got {settings.muscles!r}")
-    if not settings.tissue_limit > 1.0:
+    if not (isinstance(settings.tissue_limit, numbers.Real) and settings.tissue_limit > 1.0):
         raise InputError(f"tissue limiting stretch must be > 1 (inf: neo-Hookean), got {settings.tissue_limit!r}")
     if settings.lip_bone not in ("free", "muscle"):
         raise InputError(f"lip_bone must be 'free' or 'muscle', got {settings.lip_bone!r}")
@@ -442,8 +442,9 @@ class StickySimulation:
             h.update(np.ascontiguousarray(arr).tobytes())
         s = self.settings
         h.update(repr((self.physics, self.fps, self.dt, self.substeps, s.damping, s.hourglass_kappa, s.saliva, s.posture_hz,
-                       tuple(s.off), s.film_elements, s.film_corners, s.lip_bone, s.muscles, s.field_smoothing, s.min_jacobian,
-                       s.tissue_limit)).encode())
+                       tuple(s.off), s.film_elements, s.film_corners, s.lip_bone, s.muscles, s.field_smoothing, s.min_jacobian)
+                      # a Gent tissue only: a neo-Hookean run's checkpoint made before the option still resumes
+                      + ((s.tissue_limit,) if np.isfinite(s.tissue_limit) else ())).encode())
         return h.hexdigest()[:16]
 
 

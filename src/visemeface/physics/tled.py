@@ -327,9 +327,10 @@ def _element_force(e, u, conn, dhdx, vol, gamma, hgk, mu, K, ijm, fe, jac, fdef,
     V = vol[e]
     x = Jm23 * I1 - 3.0                       # Ī₁ − 3; Gent's μ_eff = μ / (1 − x / J_m), ijm = 1 / J_m
     gi = 1.0 - x * ijm[e]
-    # at or past the limiting stretch there is no finite stress: -inf is the divergence check's sign for it
-    # (a select, not a branch around a store, so the element loop still vectorises)
-    jac[e] = -np.inf if gi <= 0.0 else J
+    # at or past the limiting stretch there is no finite stress: NaN forces, and J = -inf the divergence
+    # check's sign for it (selects, not a branch around a store, so the element loop still vectorises)
+    jac[e] = -np.inf if (gi <= 0.0 and J > 0.0) else J
+    gi = gi if gi > 0.0 else np.nan
     m = mu[e] * Jm23 / gi
     am = V * m
     bm = V * (K[e] * J * (J - 1.0) - m * I1 / 3.0) / J
@@ -379,7 +380,7 @@ def _element_force(e, u, conn, dhdx, vol, gamma, hgk, mu, K, ijm, fe, jac, fdef,
     if want_energy:
         hg = (q00 * q00 + q01 * q01 + q02 * q02 + q10 * q10 + q11 * q11 + q12 * q12
               + q20 * q20 + q21 * q21 + q22 * q22 + q30 * q30 + q31 * q31 + q32 * q32)
-        iso = 0.5 * mu[e] * x if ijm[e] == 0.0 else -0.5 * mu[e] / ijm[e] * np.log(gi)
+        iso = 0.5 * mu[e] * x if ijm[e] == 0.0 else -0.5 * mu[e] / ijm[e] * np.log1p(-x * ijm[e])
         energy[e] = V * (iso + 0.5 * K[e] * (J - 1.0) * (J - 1.0)) + 0.5 * k * hg
 
 
@@ -501,8 +502,8 @@ def _element_forces_np(u, conn, dhdx, vol, gamma, hgk, mu, K, ijm, fe, jac, fdef
     Jm23 = 1.0 / np.cbrt(J * J)
     x = Jm23 * I1 - 3.0
     gi = 1.0 - x * ijm
-    jac_bad = gi <= 0.0
-    gi = np.where(jac_bad, 1.0, gi)
+    jac_bad = (gi <= 0.0) & (J > 0.0)
+    gi = np.where(gi > 0.0, gi, np.nan)
     m = mu * Jm23 / gi
     S = m[:, None, None] * np.eye(3) + (K * J * (J - 1.0) - m * I1 / 3.0)[:, None, None] * Cinv
     P = vol[:, None, None] * (X @ S)
@@ -513,7 +514,7 @@ def _element_forces_np(u, conn, dhdx, vol, gamma, hgk, mu, K, ijm, fe, jac, fdef
         fdef[:] = X
     if want_energy:
         with np.errstate(divide="ignore", invalid="ignore"):
-            iso = np.where(ijm == 0.0, 0.5 * mu * x, -0.5 * mu / ijm * np.log(gi))
+            iso = np.where(ijm == 0.0, 0.5 * mu * x, -0.5 * mu / ijm * np.log1p(-x * ijm))
         energy[:] = (vol * (iso + 0.5 * K * (J - 1.0) ** 2)
                      + 0.5 * hgk * np.einsum("eki,eki->e", q, q))
 
@@ -758,9 +759,19 @@ class TLEDSolver:
                           self._energy, want_energy)
 
     def internal_forces(self, u: np.ndarray) -> np.ndarray:
-        """Assembled internal nodal forces F(u) (n, 3) (N), hook not applied."""
+        """Assembled internal nodal forces F(u) (n, 3) (N), hook not applied.
+
+        Raises
+        ------
+        InputError
+            If ``u`` takes an element to or past its material's limiting stretch (no finite force).
+        """
         u = np.ascontiguousarray(u, dtype=np.float64)
         self._element_forces(u, False)
+        past = np.flatnonzero(self._jac == -np.inf)
+        if len(past):
+            raise InputError(f"element {int(past[0])} (and {len(past) - 1} more) is at or past the tissue's "
+                             f"limiting stretch in this displacement: no finite force")
         out = np.zeros((self.mesh.n_nodes, 3))
         if self.backend == "numba":
             _gather_nb(self._fe.reshape(-1, 3), self._ptr, self._slot, out)
@@ -794,7 +805,8 @@ class TLEDSolver:
         bad = np.flatnonzero(~(self._jac > 0) | ~np.isfinite(self._jac))
         e = int(bad[0])
         J = self._jac[e]
-        what = ("reached the tissue's limiting stretch (Gent's J_m)" if J == -np.inf
+        what = ("reached the tissue's limiting stretch (Gent's J_m; the step, taken at rest, can be too long for "
+                "the stiffened tissue)" if J == -np.inf
                 else "a non-finite deformation (NaN/inf displacement)" if not np.isfinite(J)
                 else f"J = {J:.4g} <= 0 (inverted)")
         raise SimulationDiverged(
