@@ -22,6 +22,7 @@ import pandas as pd
 from visemeface.errors import InputError, SimulationDiverged, close_matches
 from visemeface.physics.film import FILM_ELEMENTS, SalivaFilm
 from visemeface.physics.glue import GLUE, glue_per_element
+from visemeface.physics.materials import SOFT_TISSUE
 from visemeface.physics.openings import film_openings, seam_openings
 from visemeface.physics.saliva import SalivaParams
 from visemeface.physics.scenarios import track_values
@@ -68,8 +69,7 @@ class PhysicsSettings:
     ``threads``: numba threads for the steps; None (the default) times a few steps at numba's thread count
     and at one, at the start and every :data:`THREAD_CHECK_SECONDS` of simulated time, and runs on the
     faster (:func:`~visemeface.runtime.faster_thread_count`; the result is the same bits at any count).
-    ``tissue_limit``: the soft tissue's limiting (isochoric) stretch (Gent; inf, the default: the seed's
-    neo-Hookean tissue), see :attr:`tissue`.
+    ``tissue_limit``: the tissue's limiting (isochoric) stretch (Gent; inf, the default: the seed's neo-Hookean).
     ``seam_elements``: where the FEM face is built here from a face (:func:`physics_face`, the speech
     commands), its lips are refined to this many tissue elements along the seam
     (:func:`~visemeface.physics.face_model.build_fem_face`); None: the face's own elements.
@@ -102,7 +102,6 @@ class PhysicsSettings:
     @property
     def tissue(self):
         """The soft tissue: seed 000's neo-Hookean ``SOFT_TISSUE``, Gent where ``tissue_limit`` is finite."""
-        from visemeface.physics.materials import SOFT_TISSUE
         return SOFT_TISSUE if np.isinf(self.tissue_limit) else SOFT_TISSUE.with_limiting_stretch(self.tissue_limit)
 
     @classmethod
@@ -273,8 +272,10 @@ class StickySimulation:
         film_dt = self.stability["dt"]
         from visemeface.physics.hexmesh import HexMesh
         from visemeface.physics.tled import TLEDSolver
+        # dead loads F_int(U), from rest: used by muscles="loads" only (a Gent law has no force in a wide-open U)
         loads = TLEDSolver(HexMesh(mesh.nodes, mesh.hexes[fem.tissue], material=np.zeros(len(fem.tissue), np.int64)),
-                           settings.tissue, dt=film_dt, hourglass_kappa=settings.hourglass_kappa)
+                           settings.tissue if settings.muscles == "loads" else SOFT_TISSUE, dt=film_dt,
+                           hourglass_kappa=settings.hourglass_kappa)
         self.drive = FaceDrive(fem, rig, self.values, self.fps, loads.internal_forces,
                                field_smoothing=settings.field_smoothing, min_jacobian=settings.min_jacobian,
                                lip_bone=settings.lip_bone)
@@ -443,7 +444,6 @@ class StickySimulation:
         s = self.settings
         h.update(repr((self.physics, self.fps, self.dt, self.substeps, s.damping, s.hourglass_kappa, s.saliva, s.posture_hz,
                        tuple(s.off), s.film_elements, s.film_corners, s.lip_bone, s.muscles, s.field_smoothing, s.min_jacobian)
-                      # a Gent tissue only: a neo-Hookean run's checkpoint made before the option still resumes
                       + ((s.tissue_limit,) if np.isfinite(s.tissue_limit) else ())).encode())
         return h.hexdigest()[:16]
 
