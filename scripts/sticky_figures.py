@@ -380,7 +380,7 @@ def main():
                     help="carry the film into the mouth corners (default: it ends at the last seam pair, a free end)")
     ap.add_argument("--tissue-limit", type=float, default=float("inf"),
                     help="soft tissue's limiting uniaxial stretch (Gent; inf, the default: the seed's neo-Hookean; "
-                         "materials.TISSUE_LIMIT, 2.5, is the stiffest the explicit step holds at glue 0.3, full jaw)")
+                         "materials.TISSUE_LIMIT, 2.5, is the lowest at which glue 0.3 at full jaw runs)")
     ap.add_argument("--seam-elements", type=int, default=None,
                     help="refine the lips to at least this many tissue elements along the seam (build_fem_face)")
     ap.add_argument("--image", default="sticky_zipper.png", help="zipper picture's name in docs/images/")

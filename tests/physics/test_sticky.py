@@ -698,8 +698,8 @@ def test_no_force_term_knows_the_seam_and_terms_switch_off(model):
     assert (gent.model.tissue_solver.ijm == 1.0 / SOFT_TISSUE.with_limiting_stretch(2.5).jm).all()
     assert (sim.model.tissue_solver.ijm == 0.0).all()
     assert gent.fingerprint() != sim.fingerprint()
-    for bad in (1.0, None, float("nan")):
-        with pytest.raises(InputError, match="limiting stretch must be > 1"):
+    for bad in (1.0, None, float("nan"), "2.5", True):
+        with pytest.raises(InputError, match="limiting stretch must be a number > 1"):
             drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(tissue_limit=bad))
 
 

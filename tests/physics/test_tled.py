@@ -519,9 +519,9 @@ def test_an_element_at_the_limiting_stretch_stops_the_run_saying_so():
     m = box_mesh((1, 1, 1), (0.01, 0.01, 0.01))
     u = m.nodes * (np.array([3.0, 3 ** -0.5, 3 ** -0.5]) - 1.0)   # isochoric stretch 3: Ī₁ − 3 = 6.7 > J_m 4.05
     solver = TLEDSolver(m, GENT, dt=1e-5, prescribed=[(np.arange(m.n_nodes), lambda t: u)])
-    with pytest.raises(SimulationDiverged, match="limiting stretch"):
+    with pytest.raises(SimulationDiverged, match="limiting stretch.*raise the limit .*a smaller dt does not help"):
         next(iter(solver.run(1)))
-    with pytest.raises(InputError, match="limiting stretch must be > 1"):
+    with pytest.raises(InputError, match="limiting stretch must be a number > 1"):
         SOFT_TISSUE.with_limiting_stretch(0.9)
     with pytest.raises(InputError, match="jm must be a positive"):
         NeoHookean(800.0, 7000.0, 1050.0, jm=0.0)

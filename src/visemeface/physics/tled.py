@@ -805,15 +805,17 @@ class TLEDSolver:
         bad = np.flatnonzero(~(self._jac > 0) | ~np.isfinite(self._jac))
         e = int(bad[0])
         J = self._jac[e]
-        what = ("reached the tissue's limiting stretch (Gent's J_m; the step, taken at rest, can be too long for "
-                "the stiffened tissue)" if J == -np.inf
+        limit = J == -np.inf
+        what = ("reached the tissue's limiting stretch" if limit
                 else "a non-finite deformation (NaN/inf displacement)" if not np.isfinite(J)
                 else f"J = {J:.4g} <= 0 (inverted)")
+        advice = ("This motion stretches the tissue further than its limit allows: raise the limit (--tissue-limit; "
+                  "2.5 holds on the default face at glue 0.3 and full jaw) or leave it out (a smaller dt does not help)"
+                  if limit else f"Reduce dt (now {self.dt:.4g} s, stable limit {self.stable_dt:.4g} s), loads or "
+                  f"prescribed motion, or raise damping")
         raise SimulationDiverged(
             f"simulation diverged at step {step} (t = {t:.6g} s): element {e} "
-            f"(nodes {self.conn[e].tolist()}) has {what}; {len(bad)} element(s) affected. "
-            f"Reduce dt (now {self.dt:.4g} s, stable limit {self.stable_dt:.4g} s), loads or prescribed motion, "
-            f"or raise damping", step, t, e)
+            f"(nodes {self.conn[e].tolist()}) has {what}; {len(bad)} element(s) affected. {advice}", step, t, e)
 
     def _apply_hook(self, step: int, t: float) -> None:
         scale = self.element_hook(step, t, self._fdef, self._fe)
