@@ -258,8 +258,7 @@ def film_and_tissue(sim, near: float = 0.6) -> dict:
     """At the run's end: the film's slabs broken, and the largest principal stretch (from rest) of the tissue
     elements within ``near`` mouth widths of the film's centroid (99th percentile and largest)."""
     s = sim.model.tissue_solver
-    u = sim.state.u
-    F = np.eye(3) + np.einsum("eai,eaj->eij", u[s.conn], s.dhdx)
+    F = s.element_stress(sim.state.u)["F"]
     stretch = np.sqrt(np.linalg.eigvalsh(np.swapaxes(F, 1, 2) @ F)[:, -1])
     X = s.mesh.nodes
     centre = X[np.unique(np.concatenate([sim.film.n0.ravel(), sim.film.n1.ravel()]))].mean(axis=0)

@@ -62,7 +62,8 @@ from numba import njit, prange
 
 from visemeface.errors import InputError, SimulationDiverged
 from visemeface.physics.hexmesh import NODE_SIGNS, HexMesh
-from visemeface.physics.materials import NeoHookean, material_table
+from visemeface.physics.materials import (TISSUE_LIMIT, NeoHookean, gent_factor, material_table,
+                                          second_piola_kirchhoff, strain_energy_density)
 from visemeface.runtime import set_threads  # noqa: F401  (re-exported: the solver's thread count)
 
 #: Hourglass base vectors Γ (8 × 4) for the node order of DESIGN §6: the
@@ -493,30 +494,21 @@ def _gather_nb(fe_flat, ptr, slot, out):  # pragma: no cover - compiled
 
 def _element_forces_np(u, conn, dhdx, vol, gamma, hgk, mu, K, ijm, fe, jac, fdef, store_f, energy,
                        want_energy):
+    """The numpy reference of :func:`_element_force`: the material law of :mod:`~visemeface.physics.materials`
+    (its S and W, NaN past a Gent limit) at each element's uniform gradient, the same hourglass control; J = −inf
+    marks an element at or past its limit."""
     ue = u[conn]                                                    # (e, 8, 3)
     X = np.eye(3) + np.einsum("eai,eaj->eij", ue, dhdx)
-    C = np.einsum("eki,ekj->eij", X, X)
     J = np.linalg.det(X)
-    Cinv = np.linalg.inv(C)
-    I1 = np.trace(C, axis1=1, axis2=2)
-    Jm23 = 1.0 / np.cbrt(J * J)
-    x = Jm23 * I1 - 3.0
-    gi = 1.0 - x * ijm
-    jac_bad = (gi <= 0.0) & (J > 0.0)
-    gi = np.where(gi > 0.0, gi, np.nan)
-    m = mu * Jm23 / gi
-    S = m[:, None, None] * np.eye(3) + (K * J * (J - 1.0) - m * I1 / 3.0)[:, None, None] * Cinv
-    P = vol[:, None, None] * (X @ S)
+    P = vol[:, None, None] * (X @ second_piola_kirchhoff(X, mu, K, ijm))
     q = np.einsum("eak,eai->eki", gamma, ue)                        # (e, 4, 3)
     fe[:] = np.einsum("eij,eaj->eai", P, dhdx) + hgk[:, None, None] * np.einsum("eak,eki->eai", gamma, q)
-    jac[:] = np.where(jac_bad, -np.inf, J)
+    x = np.einsum("eij,eij->e", X, X) / np.cbrt(J * J) - 3.0       # Ī₁ − 3
+    jac[:] = np.where(np.isnan(gent_factor(x, ijm)) & (J > 0.0), -np.inf, J)
     if store_f:
         fdef[:] = X
     if want_energy:
-        with np.errstate(divide="ignore", invalid="ignore"):
-            iso = np.where(ijm == 0.0, 0.5 * mu * x, -0.5 * mu / ijm * np.log1p(-x * ijm))
-        energy[:] = (vol * (iso + 0.5 * K * (J - 1.0) ** 2)
-                     + 0.5 * hgk * np.einsum("eki,eki->e", q, q))
+        energy[:] = vol * strain_energy_density(X, mu, K, ijm) + 0.5 * hgk * np.einsum("eki,eki->e", q, q)
 
 
 def _gather_np(fe_flat, conn_flat, out):
@@ -789,8 +781,6 @@ class TLEDSolver:
             ``cauchy`` (σ = F S Fᵀ / J), evaluated at the element centre with the
             uniform gradient (numpy).
         """
-        from visemeface.physics.materials import second_piola_kirchhoff
-
         ue = np.asarray(u, dtype=np.float64)[self.conn]
         F = np.eye(3) + np.einsum("eai,eaj->eij", ue, self.dhdx)
         S = second_piola_kirchhoff(F, self.mu, self.K, self.ijm)
@@ -810,7 +800,8 @@ class TLEDSolver:
                 else "a non-finite deformation (NaN/inf displacement)" if not np.isfinite(J)
                 else f"J = {J:.4g} <= 0 (inverted)")
         advice = ("This motion stretches the tissue further than its limit allows: raise the limit (--tissue-limit; "
-                  "2.5 holds on the default face at glue 0.3 and full jaw) or leave it out (a smaller dt does not help)"
+                  f"{TISSUE_LIMIT:g} holds on the default face at glue 0.3 and full jaw) or leave it out (a smaller dt "
+                  "does not help)"
                   if limit else f"Reduce dt (now {self.dt:.4g} s, stable limit {self.stable_dt:.4g} s), loads or "
                   f"prescribed motion, or raise damping")
         raise SimulationDiverged(
