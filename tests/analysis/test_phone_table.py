@@ -1,0 +1,38 @@
+"""scripts/compare_realdata.py's per-phone table: a phone is judged against its own clip's scale."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "compare_realdata.py"
+
+
+@pytest.fixture(scope="module")
+def cr():
+    spec = importlib.util.spec_from_file_location("compare_realdata", SCRIPT)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_a_clip_that_opens_everything_wider_does_not_make_its_own_phone_look_under_opened(cr):
+    # clip A: the speaker opens every phone twice as wide as ours; clip B: the same as ours.
+    # "iy" is only in A, "aa" in both; ours and the speaker's agree up to A's scale.
+    rows = [("A", "aa", 0.40, 0.20), ("A", "iy", 0.20, 0.10), ("A", "t", 0.16, 0.08), ("A", "m", 0.0, 0.0),
+            ("B", "aa", 0.20, 0.20), ("B", "t", 0.08, 0.08), ("B", "s", 0.10, 0.10)]
+    table, scales = cr.phone_table(rows)
+    assert scales.to_dict() == pytest.approx({"A": 0.5, "B": 1.0})
+    assert table.loc["iy", "ours_minus_real"] == pytest.approx(-0.10)      # pooled: looks under-opened
+    assert table.loc["iy", "clip_adjusted"] == pytest.approx(0.0)           # against its clip: as the speaker
+    assert table.loc["m", "clip_adjusted"] == 0.0                           # a shut mouth stays shut
+    assert table.loc["aa", "clips"] == 2 and table.loc["aa", "frames"] == 2
+
+
+def test_a_phone_under_opened_within_its_clip_stays_under_opened(cr):
+    rows = [("A", "aa", 0.40, 0.20), ("A", "t", 0.16, 0.08), ("A", "s", 0.20, 0.10), ("A", "iy", 0.20, 0.03)]
+    table, _ = cr.phone_table(rows)
+    assert table.loc["iy", "clip_adjusted"] == pytest.approx(0.03 - 0.5 * 0.20)
+    assert table.index[0] == "iy"                                           # sorted: the most under-opened first
