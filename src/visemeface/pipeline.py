@@ -20,7 +20,10 @@ continues the simulation from the saved state, so no frame is simulated twice
 and the outputs equal those of an uninterrupted run. A kinematic motion needs
 no checkpoint (any frame is one matrix product); its expensive part, rendering,
 is kept by the frames sink (``--frames DIR``), whose finished PNGs a resumed
-run reads back instead of rendering them again.
+run reads back instead of rendering them again. A run that diverges keeps no
+checkpoint: the simulation is deterministic, so resumed it diverges at the same
+step again; the finished PNGs stay in the frames sink's ``.partial`` folder to
+look at, and the next run (with other options) starts afresh.
 """
 
 from __future__ import annotations
@@ -29,7 +32,7 @@ import contextlib
 import dataclasses
 from dataclasses import dataclass, field
 
-from visemeface.errors import InputError
+from visemeface.errors import InputError, SimulationDiverged
 from visemeface.export.sinks import RunInfo, Sink, check_distinct
 from visemeface.motion import Motion
 from visemeface.outputs import progress
@@ -146,11 +149,12 @@ def run(motion: Motion, sinks: list[Sink], render: RenderSettings | None = None,
             _stream(motion, sinks, renderer, checkpoint, done, state, checkpoint_every, stats, show_progress)
             for s in sinks:
                 s.close()
-        except BaseException:
+        except BaseException as exc:
+            diverged = isinstance(exc, SimulationDiverged)   # deterministic: a resumed run diverges again
             for s in opened:
-                s.abort()
+                s.abort(resumable=not diverged)
             if checkpoint is not None:
-                checkpoint.close()
+                checkpoint.remove() if diverged else checkpoint.close()
             raise
         for s in sinks:
             stats.written += s.commit()

@@ -218,3 +218,29 @@ def test_frame_clock_one_rule():
     assert frame_count(0.8, 30) == 24 and frame_count(0.1, 30) == 3 and frame_count(0.0, 30) == 1
     assert frame_of(0.1, 30) == 3 and frame_of(0.0999, 30) == 2
     assert pipeline.RenderSettings(size=48, msaa=0).check().key() == "48/face/msaa0"
+
+
+def test_a_diverged_run_keeps_no_checkpoint_and_does_not_offer_resume(work, recorder, capsys):
+    """A simulation is deterministic: resumed after a divergence it diverges at the same step again, and
+    with the options changed the checkpoint would be refused. So none is kept (the next run needs no
+    --force), the finished frames stay to look at, and nothing says to rerun with --resume."""
+    from visemeface.errors import SimulationDiverged
+    from visemeface.physics import drive
+
+    def diverges_after_one(self, start=None):
+        yield next(iter(real_frames(self, start)))
+        raise SimulationDiverged("simulation diverged at step 7 (t = 0.001 s): forced", 7, 0.001, 0)
+    real_frames = drive.StickySimulation.frames
+    monkey = pytest.MonkeyPatch()
+    monkey.setattr(drive.StickySimulation, "frames", diverges_after_one)
+    try:
+        code = main(["simulate", "part", "--resolution", "800", "--fps", "10", "--no-video", "--csv", "s.csv",
+                     "--frames", "fr", "--recorder", "c.rec", "-q"])
+    finally:
+        monkey.undo()
+    err = capsys.readouterr().err
+    assert code == 3 and _writes(recorder.calls) == [0]
+    assert "diverged at step 7" in err and "--resume to continue" not in err
+    assert "1 finished frame(s) kept in fr.partial; to look at" in err
+    assert sorted(p.name for p in work.iterdir() if not p.name.startswith(".")) == [
+        "fr.partial", "tiny.txt"]                              # no checkpoint, no output written

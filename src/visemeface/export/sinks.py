@@ -138,8 +138,9 @@ class Sink:
         """Rename the finished temporaries into place; returns the paths written."""
         return [s.commit() for s in self.staged]
 
-    def abort(self) -> None:
-        """Remove the temporaries (the run failed or was interrupted)."""
+    def abort(self, resumable: bool = True) -> None:
+        """Remove the temporaries (the run failed or was interrupted; ``resumable``: whether ``--resume`` can
+        continue it, False after a divergence, which a resumed run meets again)."""
         for s in self.staged:
             s.abort()
 
