@@ -117,7 +117,8 @@ class PhysicsSettings:
         pair of lip vertices it leaves the corners unglued, and they open as dark notches while the
         rest of the seam is stuck (on /f v/ and wide vowels in speech, and beside a held centre).
         The tissue stays neo-Hookean (``tissue_limit`` inf): a limiting stretch lets a strong glue go
-        at full jaw, but shortens the first /b/ of "Bob moves five boats" to 2 frames (issue 16's figures).
+        at full jaw, but shortens seed 001's double opening on its mouth-opening action to 5-7 frames (10
+        neo-Hookean) and, at 2.5, the first /b/ of "Bob moves five boats" to 2 frames (README's table).
         """
         from visemeface.face.refine import SEAM_ELEMENTS
         from visemeface.physics.saliva import RUPTURE_TIME
