@@ -151,8 +151,9 @@ def run(motion: Motion, sinks: list[Sink], render: RenderSettings | None = None,
                 s.close()
         except BaseException as exc:
             diverged = isinstance(exc, SimulationDiverged)   # deterministic: a resumed run diverges again
+            run_info.resumable = not diverged
             for s in opened:
-                s.abort(resumable=not diverged)
+                s.abort()
             if checkpoint is not None:
                 checkpoint.remove() if diverged else checkpoint.close()
             raise

@@ -204,10 +204,10 @@ class FramesSink(Sink):
         if not write_video_sidecar(self.tmp[0], run.mouth_box, fps=run.fps, size=(run.size, run.size), force=True):
             self.staged.pop().abort()     # thumbnails too small to measure a mouth in: no sidecar
 
-    def abort(self, resumable: bool = True) -> None:
-        super().abort(resumable)
+    def abort(self) -> None:
+        super().abort()
         if self.partial.exists():
             n = sum(1 for _ in self.partial.glob("frame_*.png"))
-            then = ("rerun with --resume to continue" if resumable else
+            then = ("rerun with --resume to continue" if getattr(self.run, "resumable", True) else
                     "to look at (a diverged run stops there again on --resume; the next run starts afresh)")
             warnings.warn(f"{n} finished frame(s) kept in {self.partial}; {then}", stacklevel=2)

@@ -151,8 +151,8 @@ class Pc2Sink(Sink):
         writer, self.writer = self.writer, None
         writer.__exit__(None, None, None)
 
-    def abort(self, resumable: bool = True) -> None:
+    def abort(self) -> None:
         writer, self.writer = getattr(self, "writer", None), None
         if writer is not None:
             writer.__exit__(KeyboardInterrupt, KeyboardInterrupt(), None)
-        super().abort(resumable)
+        super().abort()

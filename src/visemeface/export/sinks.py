@@ -58,6 +58,9 @@ class RunInfo:
         End of the utterance (s); may lie up to a frame after the last frame.
     extra : dict
         Anything else a sink may need (e.g. the physics settings).
+    resumable : bool
+        Whether ``--resume`` can continue the run if it stops: False once it has stopped at a divergence
+        (set before the sinks' ``abort``), which a resumed run, being deterministic, meets again.
     """
 
     face: Any
@@ -70,6 +73,7 @@ class RunInfo:
     track: Any = None
     end_time: float | None = None
     extra: dict = field(default_factory=dict)
+    resumable: bool = True
 
 
 class Sink:
@@ -138,9 +142,9 @@ class Sink:
         """Rename the finished temporaries into place; returns the paths written."""
         return [s.commit() for s in self.staged]
 
-    def abort(self, resumable: bool = True) -> None:
-        """Remove the temporaries (the run failed or was interrupted; ``resumable``: whether ``--resume`` can
-        continue it, False after a divergence, which a resumed run meets again)."""
+    def abort(self) -> None:
+        """Remove the temporaries (the run failed or was interrupted; ``self.run.resumable`` says whether
+        ``--resume`` can continue it)."""
         for s in self.staged:
             s.abort()
 

@@ -51,8 +51,8 @@ class MeasuresSink(Sink):
     def close(self) -> None:
         self._fh.close()
 
-    def abort(self, resumable: bool = True) -> None:
+    def abort(self) -> None:
         fh = getattr(self, "_fh", None)
         if fh is not None:
             fh.close()
-        super().abort(resumable)
+        super().abort()

@@ -185,9 +185,9 @@ class VideoSink(Sink):
         if not write_video_sidecar(self.tmp[1], run.mouth_box, fps=run.fps, size=(run.size, run.size), force=True):
             self.staged.pop().abort()     # thumbnails too small to measure a mouth in: no sidecar
 
-    def abort(self, resumable: bool = True) -> None:
+    def abort(self) -> None:
         ctx, self._ctx = getattr(self, "_ctx", None), None
         if ctx is not None:
             with contextlib.suppress(Exception):
                 ctx.__exit__(KeyboardInterrupt, KeyboardInterrupt(), None)
-        super().abort(resumable)
+        super().abort()
