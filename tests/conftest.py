@@ -29,6 +29,19 @@ def pytest_configure(config):
     config.addinivalue_line("markers", "realdata: needs ../shared/realdata (skipped where absent)")
 
 
+@pytest.fixture(scope="session")
+def load_script():
+    """``load_script("name")``: import ``scripts/name.py`` (the scripts are no package) as a module."""
+    import importlib.util
+
+    def load(name: str):
+        spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / f"{name}.py")
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+        return mod
+    return load
+
+
 def pytest_collection_modifyitems(config, items):
     if REALDATA.is_dir():
         return

@@ -2,20 +2,12 @@
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import pytest
-
-SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "compare_realdata.py"
 
 
 @pytest.fixture(scope="module")
-def cr():
-    spec = importlib.util.spec_from_file_location("compare_realdata", SCRIPT)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+def cr(load_script):
+    return load_script("compare_realdata")
 
 
 def test_a_clip_that_opens_everything_wider_does_not_make_its_own_phone_look_under_opened(cr):

@@ -252,21 +252,15 @@ def test_parse_weights():
             lib.parse_weights(bad)
 
 
-def test_viseme_table_is_up_to_date_with_targets_and_rig(rig, visemes):
+def test_viseme_table_is_up_to_date_with_targets_and_rig(rig, visemes, load_script):
     """visemes.csv poses the lips as well as a fresh fit of targets.csv on the current rig.
 
     Fails when targets.csv or the rig changed without rerunning
     ``PYTHONPATH=src python scripts/fit_visemes.py --force``.
     """
-    import importlib.util
-    from pathlib import Path
-
     from visemeface.muscles.measure import LipGauge
 
-    spec = importlib.util.spec_from_file_location(
-        "fit_visemes", Path(__file__).resolve().parents[2] / "scripts" / "fit_visemes.py")
-    fv = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(fv)
+    fv = load_script("fit_visemes")
     rows, report = fv.fit_table(rig)
     gauge = LipGauge(rig.face)
     stale = []

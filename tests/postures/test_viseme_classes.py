@@ -2,21 +2,13 @@
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "viseme_class_test.py"
-
 
 @pytest.fixture(scope="module")
-def ct():
-    spec = importlib.util.spec_from_file_location("viseme_class_test", SCRIPT)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+def ct(load_script):
+    return load_script("viseme_class_test")
 
 
 def test_leave_one_out_excludes_the_sample_from_its_centroid(ct):
