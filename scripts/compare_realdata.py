@@ -186,14 +186,16 @@ def phone_table(rows):
     One recording of the speaker opens every phone wider or narrower than another, relative to its mouth
     width (measured: our heights are 0.61 to 1.32 times the speaker's, clip by clip, over the frames both
     mouths are open), so a phone seen in one clip only is otherwise judged by that clip's scale. A clip's
-    scale is the median of ours / real over the frames where both are open; ``clip_adjusted`` is the mean
-    of ours − scale × real (a shut mouth stays shut). Returns (table, scales).
+    scale is the median of ours / real over the frames where both are open (NaN for a clip with none:
+    its frames then count in the pooled columns only); ``clip_adjusted`` is the mean of ours − scale × real
+    (a shut mouth stays shut). Frames where either height is unknown (NaN) are left out. Returns (table,
+    scales).
     """
     import pandas as pd
 
-    df = pd.DataFrame(rows, columns=["clip", "phone", "real", "ours"])
+    df = pd.DataFrame(rows, columns=["clip", "phone", "real", "ours"]).dropna(subset=["real", "ours"])
     both = df[(df["real"] > 0) & (df["ours"] > 0)]
-    scales = (both["ours"] / both["real"]).groupby(both["clip"]).median().reindex(df["clip"].unique()).fillna(1.0)
+    scales = (both["ours"] / both["real"]).groupby(both["clip"]).median().reindex(df["clip"].unique())
     df["diff"] = df["ours"] - df["real"]
     df["adjusted"] = df["ours"] - df["clip"].map(scales) * df["real"]
     table = df.groupby("phone").agg(frames=("real", "size"), clips=("clip", "nunique"), real=("real", "mean"),
@@ -204,9 +206,10 @@ def phone_table(rows):
 
 def print_phone_table(rows) -> None:
     """:func:`phone_table`, printed."""
-    table, offsets = phone_table(rows)
+    table, scales = phone_table(rows)
     print("opening height per aligned phone over the speech spans (mouth widths), all clips pooled; "
-          "clip scales (median ours / real, both open): " + ", ".join(f"{c} {v:.2f}" for c, v in offsets.items()))
+          "clip scales (median ours / real, both open): "
+          + ", ".join(f"{c} {v:.2f}" if v == v else f"{c} n/a (no frame with both open)" for c, v in scales.items()))
     print(table.round(3).to_string())
 
 

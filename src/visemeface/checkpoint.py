@@ -13,7 +13,8 @@ The state is written after the frame's vertices, each time under a temporary
 name and renamed, so the folder always describes a consistent prefix of the
 run; frames recorded after the last state (an interruption between the two)
 are cut off when the run resumes. The folder is removed when the run
-completes.
+completes, and when it diverges (:mod:`visemeface.pipeline`: a resumed run would
+diverge at the same step).
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from visemeface.errors import InputError
 from visemeface.motion import Frame
 
 STATE, VERTICES, DATA = "state.npz", "vertices.f32", "data.jsonl"
-_RESERVED = ("_frames_done", "_key")
+_RESERVED = ("_frames_done", "_key", "_settings")
 
 
 def checkpoint_folder(output: str | Path) -> Path:
@@ -50,11 +51,15 @@ class RunCheckpoint:
         The motion's key: a checkpoint of another run is refused.
     n_vertices : int
     fps : float
+    settings : dict, optional
+        The run's named settings (:meth:`visemeface.motion.Motion.settings`), saved beside the key so that a
+        refused checkpoint can say which of them differ.
     """
 
-    def __init__(self, folder: str | Path, key: str, n_vertices: int, fps: float):
+    def __init__(self, folder: str | Path, key: str, n_vertices: int, fps: float, settings: dict | None = None):
         self.folder = Path(folder)
         self.key, self.n_vertices, self.fps = key, int(n_vertices), float(fps)
+        self.settings = dict(settings or {})
         self._vfile = None
         self._dfile = None
 
@@ -82,12 +87,15 @@ class RunCheckpoint:
             if done.shape or done.dtype.kind not in "iu" or key.shape or key.dtype.kind != "U":
                 raise ValueError("wrong type of the frame count or key")
             done, key = int(done), str(key)
+            saved = json.loads(str(data.pop("_settings"))) if "_settings" in data else None
+            if saved is not None and not isinstance(saved, dict):
+                raise ValueError("the settings are no mapping")
         except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
             raise InputError(f"not a readable checkpoint ({type(exc).__name__}); remove it or use --force "
                              "to start over", path) from None
         if key != self.key:
-            raise InputError("the checkpoint belongs to a different run (other input or options); use the "
-                             "same ones, or --force to start over", self.folder)
+            raise InputError(f"the checkpoint belongs to a different run ({self._differences(saved)}); use the "
+                             "same input and options, or --force to start over", self.folder)
         have = self._frames_on_disk()
         if done < 1 or have < done:
             raise InputError(f"the checkpoint is incomplete ({have} of {done} frames); use --force to start "
@@ -97,6 +105,16 @@ class RunCheckpoint:
             if isinstance(v, np.ndarray) and v.ndim == 0 and v.dtype.kind == "U":
                 state[k] = str(v)
         return done, state
+
+    def _differences(self, saved: dict | None) -> str:
+        """Which named settings differ from the checkpoint's, e.g. "tissue_limit 2.5 then, inf now"."""
+        if not saved or not self.settings:
+            return "other input or options"
+        names = sorted(k for k in set(saved) | set(self.settings) if saved.get(k) != self.settings.get(k))
+        if not names:
+            return "other input, the same options"
+        said = [f"{k} {saved.get(k, '(none)')} then, {self.settings.get(k, '(none)')} now" for k in names[:3]]
+        return "; ".join(said) + (f"; and {len(names) - 3} more" if len(names) > 3 else "")
 
     def _frames_on_disk(self) -> int:
         try:
@@ -148,7 +166,8 @@ class RunCheckpoint:
             raise ValueError(f"state key {bad[0]!r} is reserved")
         tmp = self.folder / (".tmp." + STATE)
         with open(tmp, "wb") as fh:
-            np.savez(fh, _frames_done=np.int64(done), _key=np.str_(self.key), **state)
+            np.savez(fh, _frames_done=np.int64(done), _key=np.str_(self.key),
+                     _settings=np.str_(json.dumps(self.settings)), **state)
         os.replace(tmp, self.folder / STATE)
 
     def close(self) -> None:

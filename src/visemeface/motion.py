@@ -113,6 +113,11 @@ class Motion:
     def key(self) -> str:
         raise NotImplementedError
 
+    def settings(self) -> dict:
+        """The run's named settings as strings (recorded in its checkpoint, so that a checkpoint refused as
+        another run's can say which differ); {} where there are none."""
+        return {}
+
 
 class KinematicMotion(Motion):
     """The rig posed along an ActivationTrack (activations clamped to the rig's ranges).
@@ -187,3 +192,12 @@ class SimulatedMotion(Motion):
 
     def key(self) -> str:
         return digest(__version__, face_digest(self.face), face_digest(self._render_face), self.sim.fingerprint())
+
+    def settings(self) -> dict:
+        """The physics, frame rate and every :class:`~visemeface.physics.drive.PhysicsSettings` field but
+        ``threads`` (which changes no result)."""
+        import dataclasses
+
+        s = self.sim.settings
+        named = {f.name: repr(getattr(s, f.name)) for f in dataclasses.fields(s) if f.name != "threads"}
+        return {"physics": self.sim.physics, "fps": f"{self.fps:g}", **named}

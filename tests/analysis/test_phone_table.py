@@ -28,3 +28,12 @@ def test_a_phone_under_opened_within_its_clip_stays_under_opened(cr):
     table, _ = cr.phone_table(rows)
     assert table.loc["iy", "clip_adjusted"] == pytest.approx(0.03 - 0.5 * 0.20)
     assert table.index[0] == "iy"                                           # sorted: the most under-opened first
+
+
+def test_a_clip_without_a_frame_both_open_has_no_scale_and_unknown_heights_are_left_out(cr):
+    rows = [("A", "aa", 0.40, 0.20), ("A", "t", 0.20, 0.10), ("C", "iy", 0.30, 0.0), ("C", "m", 0.0, 0.0),
+            ("A", "aa", float("nan"), 0.30), ("A", "aa", 0.40, float("nan"))]
+    table, scales = cr.phone_table(rows)
+    assert scales["A"] == pytest.approx(0.5) and scales.isna()["C"]      # no made-up 1.0 for C
+    assert table.loc["iy", "ours_minus_real"] == pytest.approx(-0.30) and table.isna().loc["iy", "clip_adjusted"]
+    assert table.loc["aa", "frames"] == 1 and table.loc["aa", "ours_minus_real"] == pytest.approx(-0.20)

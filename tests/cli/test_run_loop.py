@@ -198,7 +198,7 @@ def test_a_checkpoint_of_another_run_or_a_corrupt_one_is_refused(tmp_path, fem_f
     done, state = RunCheckpoint(folder, "key-a", 4, 30.0).load()
     assert done == 3 and state["frame"] == 2 and state["tag"] == "s" and state["u"].tolist() == [0, 1, 2]
     assert RunCheckpoint(folder, "key-a", 4, 30.0).replay(1).data == {"g": 1.0}
-    with pytest.raises(InputError, match="different run"):
+    with pytest.raises(InputError, match=r"different run \(other input or options\)"):
         RunCheckpoint(folder, "key-b", 4, 30.0).load()
     with pytest.raises(InputError, match="--resume to continue it or --force"):
         RunCheckpoint(folder, "key-a", 4, 30.0).check(resume=False, force=False)
@@ -210,6 +210,40 @@ def test_a_checkpoint_of_another_run_or_a_corrupt_one_is_refused(tmp_path, fem_f
         np.savez(fh, _frames_done=np.int64(1), _key=np.str_("key-a"), evil=np.array([object()], dtype=object))
     with pytest.raises(InputError, match="not a readable checkpoint"):
         RunCheckpoint(folder, "key-a", 4, 30.0).load()
+
+
+def test_a_refused_checkpoint_names_the_settings_that_differ(tmp_path):
+    from visemeface.checkpoint import RunCheckpoint
+    from visemeface.errors import InputError
+    from visemeface.motion import Frame
+
+    folder = tmp_path / "x.mp4.checkpoint"
+    then = {"physics": "sticky", "glue": "0.3", "tissue_limit": "2.5", "dt": "None"}
+    ck = RunCheckpoint(folder, "key-a", 4, 30.0, then)
+    ck.start(0)
+    ck.record(Frame(0, 0.0, np.zeros((4, 3), np.float32), {}))
+    ck.save({"frame": 0}, 1)
+    ck.close()
+    assert RunCheckpoint(folder, "key-a", 4, 30.0, then).load()[0] == 1
+    with pytest.raises(InputError, match=r"different run \(tissue_limit 2.5 then, inf now\); use the same input and options"):
+        RunCheckpoint(folder, "key-b", 4, 30.0, {**then, "tissue_limit": "inf"}).load()
+    with pytest.raises(InputError, match=r"\(dt None then, 1e-05 now; glue 0.3 then, 0.08 now\)"):
+        RunCheckpoint(folder, "key-b", 4, 30.0, {**then, "glue": "0.08", "dt": "1e-05"}).load()
+    with pytest.raises(InputError, match=r"\(other input, the same options\)"):    # e.g. another transcript
+        RunCheckpoint(folder, "key-b", 4, 30.0, then).load()
+
+
+def test_a_simulations_settings_name_every_option_that_changes_its_result(fem_face, rig):
+    from visemeface.motion import SimulatedMotion
+    from visemeface.physics import drive
+
+    fem = fem_face
+    track = drive.ramp_track(rig.names, 30, 0.0, 0.1, 0.0, 0.2)
+    a = SimulatedMotion(drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(tissue_limit=2.5)))
+    b = SimulatedMotion(drive.StickySimulation(fem, rig, track, settings=drive.PhysicsSettings(threads=1)))
+    diff = {k for k in a.settings() if a.settings()[k] != b.settings()[k]}
+    assert diff == {"tissue_limit"} and a.settings()["physics"] == "sticky" and a.settings()["fps"] == "30"
+    assert a.key() != b.key()
 
 
 def test_frame_clock_one_rule():

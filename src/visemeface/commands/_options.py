@@ -213,7 +213,8 @@ def checkpoint_of(motion, sinks, args):
         return None
     from visemeface.checkpoint import RunCheckpoint, checkpoint_folder
 
-    ck = RunCheckpoint(checkpoint_folder(sinks[0].targets()[0]), motion.key(), motion.render_face.n_vertices, motion.fps)
+    ck = RunCheckpoint(checkpoint_folder(sinks[0].targets()[0]), motion.key(), motion.render_face.n_vertices, motion.fps,
+                       motion.settings())
     ck.check(resume=args.resume, force=args.force)
     return ck
 

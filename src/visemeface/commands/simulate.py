@@ -39,7 +39,7 @@ and the glue lets go.
 Writes OUTPUT (MP4) and OUTPUT's stem + .saliva.csv (--csv; per frame: time,
 jaw, broken fraction of the film along the seam, number and span of openings
 along the seam, centre gap, largest stretch). The state is saved after every
-frame in OUTPUT.checkpoint/, removed when the run completes. Glue profiles:
+frame in OUTPUT.checkpoint/, removed when the run completes or diverges. Glue profiles:
 WHERE=VALUE items over --glue, WHERE one of centre (the mouth's central twelfth),
 left, right, corners, all or a range a..b of the position across the mouth
 (-1 right corner .. +1 left corner). Exit status 3: the simulation diverged
