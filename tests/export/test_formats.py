@@ -109,6 +109,18 @@ def test_weight_files_parse_back(exported):
     assert vrm[["aa", "oh", "ou"]].to_numpy().max() > 0.3
 
 
+def test_oculus_visemes_say_what_is_spoken_whatever_the_face_does(tmp_path):
+    """Meta's visemes are the speech's classes, with a character's expressions driven beside them: fitted to
+    the whole face, a smile at rest read as FF 0.81. From speak they are the speech's own pose's."""
+    (tmp_path / "t.txt").write_text("0.00 0.30 _\n0.30 0.50 aa\n0.50 0.80 _\n")
+    for name, extra in (("plain", []), ("happy", ["--emotion", "happiness=1"])):
+        assert main(["speak", str(tmp_path / "t.txt"), "--no-video", "-q", "--oculus", str(tmp_path / f"{name}.csv"),
+                     *extra]) == 0
+    plain, happy = (pd.read_csv(tmp_path / f"{n}.csv") for n in ("plain", "happy"))
+    pd.testing.assert_frame_equal(plain, happy)
+    assert happy.loc[0, "sil"] > 0.9 and happy.loc[0, "FF"] == 0 and happy["aa"].max() > 0.9
+
+
 def test_rhubarb_json_of_a_run(exported):
     doc = json.loads((exported / "r.json").read_text())
     cues = doc["mouthCues"]
