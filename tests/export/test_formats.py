@@ -118,7 +118,8 @@ def test_oculus_visemes_say_what_is_spoken_whatever_the_face_does(tmp_path):
                      *extra]) == 0
     plain, happy = (pd.read_csv(tmp_path / f"{n}.csv") for n in ("plain", "happy"))
     pd.testing.assert_frame_equal(plain, happy)
-    assert happy.loc[0, "sil"] > 0.9 and happy.loc[0, "FF"] == 0 and happy["aa"].max() > 0.9
+    assert happy.loc[0, "sil"] > 0.9 and happy.loc[0, "FF"] == 0
+    assert happy.loc[12, "aa"] == happy.iloc[12, 2:].max() > 0.7           # 0.40 s: the /aa/
 
 
 def test_rhubarb_json_of_a_run(exported):

@@ -297,3 +297,24 @@ def test_closure_holds_only_the_lip_opening_functions():
     assert track["jaw"].iloc[centre] == 0.0
     assert track["levator_labii_superioris_left"].iloc[centre] == 0.0
     assert track["levator_labii_superioris_alaeque_nasi_left"].iloc[centre] == pytest.approx(0.6)
+
+
+@pytest.mark.parametrize("mode", ["coarticulation", "linear", "cosine"])
+def test_class_track_blends_the_phones_classes_as_the_visemes_are_blended(mode):
+    """Oculus's visemes from the timeline: rows add up to 1, each phone's centre is its class, a /p/ (its
+    contact forced, as the visemes') is PP at 1, and a keyed track holds every phone at its class."""
+    from visemeface.retarget.recipes import OCULUS, phoneme_classes
+    from visemeface.speech.timeline import class_track
+
+    classes = {s: c[0] for s, c in phoneme_classes().items()}
+    seg = segs(["p", "aa", "t", "uw"], 0.25)                   # after 0.3 s of silence
+    w = class_track(seg, classes, OCULUS, fps=100, mode=mode)
+    assert list(w.columns) == list(OCULUS)
+    np.testing.assert_allclose(w.sum(axis=1), 1.0, atol=1e-9)
+    for centre, cls in ((0.425, "PP"), (0.675, "aa"), (0.925, "DD"), (1.175, "ou"), (0.1, "sil")):
+        row = w.iloc[int(round(centre * 100))]
+        assert row.idxmax() == cls and row[cls] > (0.99 if mode != "coarticulation" or cls == "PP" else 0.5), \
+            (mode, cls, row.idxmax(), row[cls])
+    assert (w[["FF", "TH", "CH", "SS", "RR"]] == 0).all().all()              # classes no phone has stay 0
+    with pytest.raises(InputError, match="no class among"):
+        class_track(seg, {**classes, "t": "XX"}, OCULUS, fps=100, mode=mode)

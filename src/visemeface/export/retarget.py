@@ -84,12 +84,8 @@ class FitSink(Sink):
         self.rest = np.asarray(run.face.vertices, dtype=np.float64)
         self.times, self.weights, self.residuals = [], [], []
 
-    def displacement(self, frame) -> np.ndarray:
-        """What is fitted for ``frame``: its vertices minus rest."""
-        return np.asarray(frame.vertices, dtype=np.float64) - self.rest
-
     def write(self, frame) -> None:
-        w, r = self.fit.frame(self.displacement(frame))
+        w, r = self.fit.frame(np.asarray(frame.vertices, dtype=np.float64) - self.rest)
         self.times.append(frame.time)
         self.weights.append(w)
         self.residuals.append(r)
@@ -141,10 +137,11 @@ class OculusSink(FitSink):
     """Oculus/Meta's 15 viseme weights per frame (sil PP FF TH DD kk CH SS nn RR aa E ih oh ou), adding up to 1.
 
     They say what is spoken, as Meta's lip sync reports it from audio, and a character's expressions are
-    driven beside them. So from ``speak`` and ``say`` (a run with an utterance) the fit is of the speech's
-    own pose, :func:`~visemeface.speech.timeline.speech_track` (the coarticulated visemes without the
-    emotions and blinks laid over them): fitted to the whole face, a smile at rest read as FF 0.81. A run
-    without speech (``simulate``) fits its frames.
+    driven beside them. So from ``speak``, ``say`` and ``batch`` (a run with an utterance) they are the
+    phones' classes (``phoneme_classes.csv``) blended along the timeline as the visemes are
+    (:func:`~visemeface.speech.timeline.class_track`): a held /p/ is PP at 1. Fitted to the face they were
+    not: a smile at rest read as FF 0.81, and 24 of the 56 visemes posed alone came out as another class.
+    A run without speech (``simulate``) fits its frames.
     """
 
     name = "oculus"
@@ -154,21 +151,20 @@ class OculusSink(FitSink):
 
     def open(self, run) -> None:
         super().open(run)
-        self.speech = None
+        self.classes = None
         utterance = run.extra.get("utterance")
         if utterance is not None:
-            from visemeface.postures.library import load_visemes
-            from visemeface.speech.timeline import MODES, speech_track
+            from visemeface.retarget.recipes import OCULUS, phoneme_classes
+            from visemeface.speech.timeline import MODES, class_track
 
-            rig = run.rig
             segments = getattr(utterance, "segments", utterance)           # an Utterance or its Segments
-            track = speech_track(segments, load_visemes(rig=rig), fps=run.fps, mode=run.extra.get("interp", MODES[0]))
-            lo, hi = np.asarray(rig.ranges, dtype=np.float64).T             # as the run's own track is clipped
-            self.speech = np.clip(rig.track_matrix(track), lo, hi)
-            self.speech_rest = np.asarray(rig.face.vertices, dtype=np.float64)
+            classes = {s: c[0] for s, c in phoneme_classes().items()}
+            self.classes = class_track(segments, classes, OCULUS, fps=run.fps,
+                                       mode=run.extra.get("interp", MODES[0])).to_numpy()
 
-    def displacement(self, frame) -> np.ndarray:
-        if self.speech is None:
-            return super().displacement(frame)
-        a = self.speech[min(frame.index, len(self.speech) - 1)]
-        return np.asarray(self.run.rig.pose(a), dtype=np.float64) - self.speech_rest
+    def write(self, frame) -> None:
+        if self.classes is None:
+            return super().write(frame)
+        self.times.append(frame.time)
+        self.weights.append(self.classes[min(frame.index, len(self.classes) - 1)])
+        self.residuals.append(float("nan"))

@@ -237,11 +237,13 @@ def _force_contacts(values, times, start, end, phones, targets, fps, edge):
     return values, strength
 
 
-def _speech(segments, visemes, fps, mode, edge):
+def _blend(segments, fps, mode, edge, targets_of):
+    """The frames' times and the per-segment targets (``targets_of(phones)`` -> (targets, columns)) blended
+    along the timeline, the contacts forced: (times, values, columns, forcing strength per frame)."""
     mode = choose(mode, MODES, "interpolation mode")
     fps = check_fps(fps)
     start, end, phones = _check_segments(segments)
-    targets, columns = _viseme_matrix(visemes, phones)
+    targets, columns = targets_of(phones)
     times = frame_times(frame_count(float(end[-1]), fps), fps)
     if mode == "coarticulation":
         values = _coarticulation(times, start, end, phones, targets, edge)
@@ -251,10 +253,34 @@ def _speech(segments, visemes, fps, mode, edge):
     return times, values, columns, strength
 
 
+def _speech(segments, visemes, fps, mode, edge):
+    return _blend(segments, fps, mode, edge, lambda phones: _viseme_matrix(visemes, phones))
+
+
 def speech_track(segments: pd.DataFrame, visemes: pd.DataFrame, fps: float = 30.0,
                  mode: str = "coarticulation", edge: float = 0.06) -> pd.DataFrame:
     """The viseme part of the track (no emotion, no clamping); see the module doc."""
     times, values, columns, _ = _speech(segments, visemes, fps, mode, edge)
+    return make_track(times, values, columns, fps)
+
+
+def class_track(segments: pd.DataFrame, classes: Mapping[str, str], names, fps: float = 30.0,
+                mode: str = "coarticulation", edge: float = 0.06) -> pd.DataFrame:
+    """Per-frame weights over the phone classes ``names`` (phone p's class is ``classes[p]``), blended along
+    the timeline as the visemes are (the same coarticulation or keyed interpolation, and /p b m f v/ held at
+    their class around their centres, as their lip contacts are): each row adds up to 1. For clients whose
+    vocabulary is classes of phones (Oculus visemes)."""
+    names = [str(n) for n in names]
+
+    def onehot(phones):
+        col = {n: j for j, n in enumerate(names)}
+        bad = sorted({p for p in phones if classes.get(p) not in col})
+        if bad:
+            raise InputError(f"no class among {', '.join(names)} for phoneme(s) {', '.join(bad)}")
+        out = np.zeros((len(phones), len(names)))
+        out[np.arange(len(phones)), [col[classes[p]] for p in phones]] = 1.0
+        return out, names
+    times, values, columns, _ = _blend(segments, fps, mode, edge, onehot)
     return make_track(times, values, columns, fps)
 
 
