@@ -1,8 +1,9 @@
 """Per-frame weights in other tools' vocabularies: ARKit (plain and Live Link Face CSV), VRM, Oculus visemes.
 
 Each sink fits every frame's displacement (the posed or simulated vertices minus rest) onto its
-vocabulary (:class:`visemeface.retarget.ShapeFit`) as the frames stream by, and writes the weights
-when the run closes: ``.csv`` (``frame,time,<names>``) or ``.json``
+vocabulary (:class:`visemeface.retarget.ShapeFit`) as the frames stream by (the Oculus visemes of a run
+with phones are the phones' classes instead, :class:`OculusSink`), and writes the weights when the run
+closes: ``.csv`` (``frame,time,<names>``) or ``.json``
 (``{"vocabulary", "fps", "names", "time", "weights": [[...], ...]}``), weights in 0–1 with 6 decimals.
 """
 
@@ -147,7 +148,8 @@ class OculusSink(FitSink):
     name = "oculus"
     vocabulary = "oculus"
     metavar = "FILE.csv|.json"
-    help = "also write Oculus/Meta's 15 viseme weights per frame (sil PP FF ... ou; CSV or JSON), of the speech alone"
+    help = ("also write Oculus/Meta's 15 viseme weights per frame (sil PP FF ... ou; CSV or JSON): the phones' "
+            "classes where there are phones, else fitted to the frames")
 
     def open(self, run) -> None:
         super().open(run)
