@@ -99,6 +99,19 @@ def test_writers_round_trip_through_the_readers(vowels_wav, tmp_path, suffix):
         format_of(tmp_path / "t.docx")
 
 
+@pytest.mark.parametrize("start, end, message", [
+    ([0.0, float("nan")], [0.2, 0.5], "must be finite"),
+    ([0.0, 0.3], [0.2, 0.25], "positive length"),
+    ([0.0, 0.1], [0.2, 0.5], "non-overlapping"),
+    ([], [], "no segments to write"),
+])
+def test_a_transcript_that_would_not_read_back_is_not_written(tmp_path, start, end, message):
+    segs = pd.DataFrame({"start": start, "end": end, "phoneme": ["aa", "b"][:len(start)]})
+    with pytest.raises(InputError, match=message):
+        write_transcript(segs, tmp_path / "t.lab")
+    assert not any(tmp_path.iterdir())
+
+
 def test_speak_a_recording_end_to_end(vowels_wav, tmp_path, monkeypatch, capsys):
     from visemeface.export.video import read_video_info
 

@@ -106,7 +106,9 @@ def dominance_table() -> pd.DataFrame:
 
 # ----------------------------------------------------------------------------- checks
 
-def _check_segments(segments: pd.DataFrame) -> tuple[np.ndarray, np.ndarray, list[str]]:
+def check_segments(segments: pd.DataFrame, what: str = "animate") -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """(start, end, phones) of timed segments, refused (InputError) unless they have the columns, at least one
+    row (there is nothing to ``what`` otherwise), and finite, non-negative, sorted, non-overlapping times."""
     for col in ("start", "end", "phoneme"):
         if col not in segments.columns:
             raise InputError(f"segments lack the column {col!r}")
@@ -114,7 +116,7 @@ def _check_segments(segments: pd.DataFrame) -> tuple[np.ndarray, np.ndarray, lis
     end = segments["end"].to_numpy(dtype=float)
     phones = [str(p) for p in segments["phoneme"]]
     if len(phones) == 0:
-        raise InputError("no segments to animate")
+        raise InputError(f"no segments to {what}")
     if not (np.isfinite(start).all() and np.isfinite(end).all()):
         raise InputError("segment times must be finite")
     if (start < 0).any() or (end <= start).any() or (start[1:] < end[:-1] - 1e-9).any():
@@ -242,7 +244,7 @@ def _blend(segments, fps, mode, edge, targets_of):
     along the timeline, the contacts forced: (times, values, columns, forcing strength per frame)."""
     mode = choose(mode, MODES, "interpolation mode")
     fps = check_fps(fps)
-    start, end, phones = _check_segments(segments)
+    start, end, phones = check_segments(segments)
     targets, columns = targets_of(phones)
     times = frame_times(frame_count(float(end[-1]), fps), fps)
     if mode == "coarticulation":

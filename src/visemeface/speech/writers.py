@@ -116,8 +116,11 @@ def write_transcript(utterance, path, fmt: str | None = None, force: bool = Fals
 
     The file appears complete or not at all; an existing one is replaced only with ``force``.
     """
+    from visemeface.speech.timeline import check_segments
+
     if isinstance(utterance, pd.DataFrame):
         utterance = Utterance(utterance)
+    check_segments(utterance.segments, "write")        # NaN or reversed times would not read back
     fmt = format_of(path) if fmt is None else fmt
     if fmt not in WRITERS:
         raise InputError(f"no writer for transcript format {fmt!r}; one of {', '.join(WRITERS)}")
