@@ -163,4 +163,9 @@ def test_library_misuse_is_refused_before_anything_is_written(tmp_path):
         animate(utt, [SINKS["track"](tmp_path / "t.csv")], emotions={"happiness": 5})
     with pytest.raises(InputError, match="must be a str"):
         text_to_utterance(None)
+    with pytest.raises(InputError, match="animate takes an Utterance .* got str"):   # text, not an Utterance
+        animate("mama", [SINKS["track"](tmp_path / "t.csv")])
     assert list(tmp_path.iterdir()) == []
+    # bare timed Segments are an utterance too
+    animate(utt.segments, [SINKS["track"](tmp_path / "t.csv")], show_progress=False)
+    assert (tmp_path / "t.csv").is_file()

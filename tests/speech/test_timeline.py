@@ -318,3 +318,13 @@ def test_class_track_blends_the_phones_classes_as_the_visemes_are_blended(mode):
     assert (w[["FF", "TH", "CH", "SS", "RR"]] == 0).all().all()              # classes no phone has stay 0
     with pytest.raises(InputError, match="no class among"):
         class_track(seg, {**classes, "t": "XX"}, OCULUS, fps=100, mode=mode)
+
+
+@pytest.mark.parametrize("keys", [[(float("nan"), "happiness", 1.0)], [(-0.5, "happiness", 1.0)],
+                                  pd.DataFrame({"time": ["soon"], "emotion": ["anger"], "weight": [1.0]})])
+def test_emotion_keys_at_no_time_are_refused(keys):
+    """A NaN key time used to give a track of NaN (an error far away, or a blank face)."""
+    from visemeface.postures.library import load_visemes
+
+    with pytest.raises(InputError, match="emotion key times must be finite seconds >= 0"):
+        activation_track(segs(["aa"], 0.2), load_visemes(), emotions=keys)

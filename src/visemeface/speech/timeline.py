@@ -296,13 +296,19 @@ def _keys_frame(keys) -> pd.DataFrame:
         missing = [c for c in ("time", "emotion", "weight") if c not in keys.columns]
         if missing:
             raise InputError(f"emotion key track lacks column(s) {', '.join(missing)}")
-        return keys[["time", "emotion", "weight"]]
-    if isinstance(keys, (list, tuple)):
+        out = keys[["time", "emotion", "weight"]]
+    elif isinstance(keys, (list, tuple)):
         if not all(isinstance(k, (list, tuple)) and len(k) == 3 for k in keys):
             raise InputError("emotion keys must be (time, emotion, weight) triples")
-        return pd.DataFrame({"time": [float(k[0]) for k in keys], "emotion": [str(k[1]) for k in keys],
-                             "weight": [k[2] for k in keys]})
-    raise InputError(f"emotions must be a mapping name->weight or a key track, got {type(keys).__name__}")
+        out = pd.DataFrame({"time": [k[0] for k in keys], "emotion": [str(k[1]) for k in keys],
+                            "weight": [k[2] for k in keys]})
+    else:
+        raise InputError(f"emotions must be a mapping name->weight or a key track, got {type(keys).__name__}")
+    t = pd.to_numeric(out["time"], errors="coerce").to_numpy(dtype=float)
+    bad = ~(np.isfinite(t) & (t >= 0))
+    if bad.any():
+        raise InputError(f"emotion key times must be finite seconds >= 0, got {out['time'].iloc[int(np.argmax(bad))]}")
+    return out
 
 
 def emotion_weights(times: np.ndarray, names: list[str], base: Mapping[str, float] | None = None,
