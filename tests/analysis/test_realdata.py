@@ -152,3 +152,13 @@ def test_real_releases_grow_over_frames_and_taper(realdata):
         expo += o["height_exponent"].dropna().tolist()
     assert len(f90) >= 6 and np.median(f90) >= 2 and max(f90) >= 3, f90
     assert len(expo) >= 2 and max(expo) < 1, expo
+
+
+def test_analyze_source_takes_a_path_as_it_takes_a_frame_source(realdata):
+    """From Python a clip's path is enough (it raised AttributeError: 'str' has no 'frames')."""
+    from visemeface.analysis.profiles import analyze_source
+
+    by_path, boxes = analyze_source(str(realdata / "bbaf2n.mpg"))
+    by_source, _ = analyze_source(open_frames(realdata / "bbaf2n.mpg"))
+    assert len(by_path) == 75 and len(boxes) == 75
+    pd.testing.assert_frame_equal(by_path, by_source)

@@ -166,6 +166,9 @@ def test_library_misuse_is_refused_before_anything_is_written(tmp_path):
     with pytest.raises(InputError, match="animate takes an Utterance .* got str"):   # text, not an Utterance
         animate("mama", [SINKS["track"](tmp_path / "t.csv")])
     assert list(tmp_path.iterdir()) == []
+    from visemeface.retarget.classes import mouth_cues
+    with pytest.raises(InputError, match="mouth cues need DECtalk phones; 'AA1' is none .did you mean: aa"):
+        mouth_cues(pd.DataFrame({"start": [0.0], "end": [0.2], "phoneme": ["AA1"]}))    # was a KeyError
     # bare timed Segments are an utterance too
     animate(utt.segments, [SINKS["track"](tmp_path / "t.csv")], show_progress=False)
     assert (tmp_path / "t.csv").is_file()

@@ -117,9 +117,15 @@ def analyze_source(source, box=None, detector: OpeningDetector | None = None,
 
     With ``box=None`` the mouth is found in every frame
     (:func:`~visemeface.analysis.mouthbox.track_mouth`) before it is measured;
-    the frames are decoded once when they fit in :data:`BUFFER_BYTES`.
+    the frames are decoded once when they fit in :data:`BUFFER_BYTES`. A path (str or Path) is opened with
+    :func:`~visemeface.analysis.video.open_frames`.
     """
     from visemeface.outputs import progress
+
+    if isinstance(source, (str, Path)):
+        from visemeface.analysis.video import open_frames
+
+        source = open_frames(source)
 
     def frames(desc):
         return progress(source.frames(), total=source.n_frames, desc=desc, show=show_progress)

@@ -31,7 +31,13 @@ def mouth_cues(segments) -> list[tuple[float, float, str]]:
     segments : Segments
         ``start``, ``end``, ``phoneme`` (DECtalk), contiguous from 0.
     """
+    from visemeface.errors import InputError, close_matches
+
     table = phoneme_classes()
+    unknown = sorted({str(p) for p in segments["phoneme"] if p not in table})
+    if unknown:
+        raise InputError(f"mouth cues need DECtalk phones; {unknown[0]!r} is none{close_matches(unknown[0].lower(), table)}"
+                         " (ARPAbet transcripts are read into DECtalk by speech.transcripts.read_utterance)")
     cues: list[list] = []
     for start, end, ph in segments[["start", "end", "phoneme"]].itertuples(index=False):
         a, b = centiseconds(float(start)), centiseconds(float(end))
