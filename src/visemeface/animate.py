@@ -107,15 +107,9 @@ def animate(utterance, sinks: list, render=None, *, rig=None, emotions=None, int
     from visemeface.export.sinks import check_physics_outputs
     from visemeface.speech.timeline import MODES, activation_track
 
-    import pandas as pd
-
     from visemeface.speech.utterance import Utterance
 
-    if isinstance(utterance, pd.DataFrame):
-        utterance = Utterance(utterance)          # bare Segments: start, end, phoneme
-    if not isinstance(utterance, Utterance):
-        raise InputError(f"animate takes an Utterance (speech.transcripts.read_utterance, speech.g2p.text_to_utterance) "
-                         f"or timed Segments, got {type(utterance).__name__}")
+    utterance = Utterance.of(utterance, "animate")
     check_physics_outputs([s.name for s in sinks], physics, option="")
     if utterance.end > MAX_UTTERANCE_S:
         raise InputError(f"the transcript lasts {utterance.end:.0f} s, over the {MAX_UTTERANCE_S} s limit of one "

@@ -159,9 +159,8 @@ class OculusSink(FitSink):
             from visemeface.retarget.recipes import OCULUS, phoneme_classes
             from visemeface.speech.timeline import MODES, class_track
 
-            segments = getattr(utterance, "segments", utterance)           # an Utterance or its Segments
             classes = {s: c[0] for s, c in phoneme_classes().items()}
-            self.classes = class_track(segments, classes, OCULUS, fps=run.fps,
+            self.classes = class_track(utterance.segments, classes, OCULUS, fps=run.fps,
                                        mode=run.extra.get("interp", MODES[0])).to_numpy()
 
     def write(self, frame) -> None:

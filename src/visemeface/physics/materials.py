@@ -226,13 +226,21 @@ def strain_energy_density(F: np.ndarray, mu, K, ijm=0.0) -> np.ndarray:
     return np.asarray(mu) * iso + 0.5 * np.asarray(K) * (J - 1.0) ** 2
 
 
-def _lateral_residual(lt, stretch, mu, K, ijm=0.0):
+def _bar_cauchy(stretch, lt, mu, K, ijm=0.0):
+    """(axial, lateral) Cauchy stress of a bar stretched ``stretch`` along and ``lt`` across (NaN past a Gent
+    limit): g μ J^{-5/3} (λᵢ² − I₁/3) + K (J − 1), J = λ λₜ², I₁ = λ² + 2λₜ²."""
     J = stretch * lt * lt
-    I1 = 2.0 * lt * lt + stretch * stretch
-    g = gent_factor(I1 / np.cbrt(J * J) - 3.0, ijm)
-    if np.isnan(g):              # past Gent's limit the stress tends to ±∞, the sign of λₜ² − I₁/3, of λₜ − λ
+    I1 = stretch * stretch + 2.0 * lt * lt
+    m = gent_factor(I1 / np.cbrt(J * J) - 3.0, ijm) * mu * J ** (-5.0 / 3.0)
+    p = K * (J - 1.0)
+    return m * (stretch * stretch - I1 / 3.0) + p, m * (lt * lt - I1 / 3.0) + p
+
+
+def _lateral_residual(lt, stretch, mu, K, ijm=0.0):
+    lateral = _bar_cauchy(stretch, lt, mu, K, ijm)[1]
+    if np.isnan(lateral):        # past Gent's limit the stress tends to ±∞, the sign of λₜ² − I₁/3, of λₜ − λ
         return float(np.copysign(1e300, lt - stretch))
-    return g * mu * J ** (-5.0 / 3.0) * (lt * lt - I1 / 3.0) + K * (J - 1.0)
+    return lateral
 
 
 def uniaxial_stress(stretch, material: NeoHookean) -> tuple[np.ndarray, np.ndarray]:
@@ -278,8 +286,5 @@ def uniaxial_stress(stretch, material: NeoHookean) -> tuple[np.ndarray, np.ndarr
         lts[i] = brentq(_lateral_residual, 1e-6, 1e3, args=(s, material.mu, material.K, material.ijm),
                         xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200)
     lt = lts.reshape(lam.shape)
-    J = lam * lt * lt
-    I1 = lam * lam + 2.0 * lt * lt
-    g = gent_factor(I1 / np.cbrt(J * J) - 3.0, material.ijm)
-    sigma = g * material.mu * J ** (-5.0 / 3.0) * (lam * lam - I1 / 3.0) + material.K * (J - 1.0)
+    sigma = _bar_cauchy(lam, lt, material.mu, material.K, material.ijm)[0]
     return sigma * lt * lt, lt

@@ -49,6 +49,19 @@ class Utterance:
     emotion_keys: pd.DataFrame = field(default_factory=no_emotion_keys)
     source_format: str = ""
 
+    @classmethod
+    def of(cls, value, what: str = "an utterance") -> Utterance:
+        """``value`` as an Utterance: itself, or bare timed :data:`Segments` wrapped; else an InputError
+        naming ``what`` needs it."""
+        if isinstance(value, Utterance):
+            return value
+        if isinstance(value, pd.DataFrame):
+            return cls(value)
+        from visemeface.errors import InputError
+
+        raise InputError(f"{what} takes an Utterance (speech.transcripts.read_utterance, "
+                         f"speech.g2p.text_to_utterance) or timed Segments, got {type(value).__name__}")
+
     @property
     def end(self) -> float:
         """End of the last segment (s): the utterance's length."""

@@ -25,8 +25,6 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import pandas as pd
-
 from visemeface.errors import InputError
 from visemeface.outputs import atomic_output
 from visemeface.postures.phonemes import SILENCE
@@ -118,8 +116,7 @@ def write_transcript(utterance, path, fmt: str | None = None, force: bool = Fals
     """
     from visemeface.speech.timeline import check_segments
 
-    if isinstance(utterance, pd.DataFrame):
-        utterance = Utterance(utterance)
+    utterance = Utterance.of(utterance, "write_transcript")
     check_segments(utterance.segments, "write")        # NaN or reversed times would not read back
     fmt = format_of(path) if fmt is None else fmt
     if fmt not in WRITERS:
