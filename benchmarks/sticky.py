@@ -15,7 +15,8 @@
    activation track -> :func:`visemeface.animate.simulated_motion` -> render each
    frame (512 px, face view); wall seconds per simulated second, for the speech
    commands' default lips (``PhysicsSettings.speech()``: refined along the seam,
-   cohesive film carried into the mouth corners) and the seed's model (``PhysicsSettings()``). Its
+   cohesive film carried into the mouth corners, Gent tissue), the same lips with the neo-Hookean tissue (the cost
+   of the stiffening, in one run) and the seed's model (``PhysicsSettings()``). Its
    threads are chosen as ``speak`` chooses them: the faster of the largest ``--threads``
    count and one, timed during the run (``PhysicsSettings.threads`` None).
 
@@ -82,8 +83,10 @@ def bench_speak(threads: int) -> None:
     from visemeface.speech.transcripts import read_transcript
 
     set_threads(threads)
-    for model, settings in (("speech default (lips refined, rupture time, film into the corners)", PhysicsSettings.speech()),
-                            ("seed (--seam-elements 0 --rupture-time 0 --no-film-corners)", PhysicsSettings())):
+    for model, settings in (("speech default (lips refined, rupture time, film into the corners, Gent tissue)",
+                             PhysicsSettings.speech()),
+                            ("speech lips, neo-Hookean tissue (--tissue-limit inf)", PhysicsSettings.speech(tissue_limit=float("inf"))),
+                            ("seed (--seam-elements 0 --rupture-time 0 --no-film-corners --tissue-limit inf)", PhysicsSettings())):
         t0 = time.perf_counter()
         face = default_face()
         rig = MuscleRig.from_file(face)

@@ -92,9 +92,10 @@ def extract_audio(video: Path, wav: Path) -> None:
 
 
 def synthetic_profile(segments, fps: float, n_frames: int, detector, physics: str | None = None,
-                      tissue_limit: float = float("inf")):
+                      tissue_limit: float | None = None):
     """Render the default face along the segments (kinematic, or the FEM face with ``physics`` sticky or
-    elastic as ``speak --physics [--tissue-limit]`` runs it) and analyse it: the profile."""
+    elastic as ``speak --physics [--tissue-limit]`` runs it; ``tissue_limit`` None: speak's) and analyse it: the
+    profile."""
     from visemeface.analysis.profiles import analyze_frames
     from visemeface.motion import KinematicMotion
     from visemeface.muscles.rig import default_rig
@@ -110,7 +111,7 @@ def synthetic_profile(segments, fps: float, n_frames: int, detector, physics: st
         from visemeface.animate import simulated_motion
         from visemeface.physics.drive import PhysicsSettings
         motion = simulated_motion(rig, track, physics,          # the speech commands' FEM face
-                                  PhysicsSettings.speech(tissue_limit=tissue_limit))
+                                  PhysicsSettings.speech(**({} if tissue_limit is None else {"tissue_limit": tissue_limit})))
     with Renderer(motion.render_face, size=(256, 256), view="mouth") as renderer:
         box = renderer.mouth_box()
         frames = [renderer.render(f.vertices) for f in motion.frames()][:n_frames]
@@ -250,8 +251,9 @@ def main() -> int:
     ap.add_argument("--out", type=Path, help="also write <clip>_real.csv, <clip>_synth.csv, <clip>.png here")
     ap.add_argument("--physics", choices=("sticky", "elastic"),
                     help="animate the FEM face (default: the kinematic face)")
-    ap.add_argument("--tissue-limit", type=float, default=float("inf"),
-                    help="with --physics: the tissue's limiting stretch (Gent; default none, as speak's)")
+    ap.add_argument("--tissue-limit", type=float,
+                    help="with --physics: the tissue's limiting stretch (Gent; default speak's, 2.8; inf: the seed's "
+                         "neo-Hookean)")
     ap.add_argument("--per-phone", action="store_true",
                     help="also print the mean opening height per aligned phone, real vs ours, also with each "
                          "clip's scale taken out")
@@ -264,8 +266,9 @@ def main() -> int:
     from visemeface.analysis.openings import OpeningDetector
     from visemeface.analysis.profiles import correlation, l2_distance, plot_profiles, shifted_profile, \
         write_profile
+    from visemeface.physics.materials import TISSUE_LIMIT
 
-    if args.tissue_limit < float("inf") and not args.physics:
+    if args.tissue_limit is not None and not args.physics:
         print("compare_realdata: --tissue-limit needs --physics sticky or elastic", file=sys.stderr)
         return 2
     videos = sorted(args.realdata.glob("*.mpg"))
@@ -288,7 +291,7 @@ def main() -> int:
         c = correlation(real, synth, max_lag=5)
         sp = speech_correlation(real, synth, video)
         rows += phone_heights(real, synth, segments, sp["span_s"], clip)
-        limit = {"tissue_limit": args.tissue_limit} if args.physics and args.tissue_limit < float("inf") else {}
+        limit = {"tissue_limit": TISSUE_LIMIT if args.tissue_limit is None else args.tissue_limit} if args.physics else {}
         print(json.dumps({"clip": clip, "text": text, "timing": timing, "physics": args.physics, **limit, "frames": n,
                           "open_frames_real": int((real["count"] > 0).sum()),
                           "open_frames_synth": int((synth["count"] > 0).sum()),

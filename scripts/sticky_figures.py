@@ -3,6 +3,9 @@
     PYTHONPATH=src python scripts/sticky_figures.py                       # all, default face (slow)
     PYTHONPATH=src python scripts/sticky_figures.py --resolution 1500 --only zipper
     PYTHONPATH=src python scripts/sticky_figures.py --only zipper --lip-bone muscle --posture-hz 0
+    # the speech commands' lips (PhysicsSettings.speech()), as README's figures:
+    PYTHONPATH=src python scripts/sticky_figures.py --seam-elements 48 --rupture-time 0.03 --film-corners \
+        --tissue-limit 2.8 --only zipper,equilibrium,glue03,merge,speech
 
 Every figure is measured on the mesh: the saliva film's slabs (>= 48 across the
 mouth, ``film_open_span``: the widest opening in mouth widths) and the face
@@ -378,8 +381,9 @@ def main():
     ap.add_argument("--film-corners", action="store_true",
                     help="carry the film into the mouth corners (default: it ends at the last seam pair, a free end)")
     ap.add_argument("--tissue-limit", type=float, default=float("inf"),
-                    help="soft tissue's limiting uniaxial stretch (Gent; inf, the default: the seed's neo-Hookean; "
-                         "materials.TISSUE_LIMIT, 2.5, is the lowest at which glue 0.3 at full jaw runs)")
+                    help="soft tissue's limiting uniaxial stretch (Gent; inf, the default here: the seed's neo-Hookean; "
+                         "the speech lips': materials.TISSUE_LIMIT, 2.8; 2.5 is the lowest at which glue 0.3 at "
+                         "full jaw runs)")
     ap.add_argument("--seam-elements", type=int, default=None,
                     help="refine the lips to at least this many tissue elements along the seam (build_fem_face)")
     ap.add_argument("--image", default="sticky_zipper.png", help="zipper picture's name in docs/images/")

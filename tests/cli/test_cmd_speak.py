@@ -450,10 +450,13 @@ def test_the_speech_lips_glue_the_mouth_corners_unless_told_not_to():
     assert physics_from_args(p.parse_args(["--physics", "sticky", "--no-film-corners"])).film_corners is False
     with pytest.raises(InputError, match="--no-film-corners needs --physics"):
         physics_from_args(p.parse_args(["--no-film-corners"]))
-    # the tissue: the seed's neo-Hookean unless a limiting stretch is given (elastic too: it is no glue)
-    assert physics_from_args(p.parse_args(["--physics", "sticky"])).tissue.ijm == 0.0
+    # the tissue: Gent at materials.TISSUE_LIMIT (the glue then lets go), another limit as given (elastic
+    # too: it is no glue), the seed's neo-Hookean with inf
+    from visemeface.physics.materials import TISSUE_LIMIT
+    assert physics_from_args(p.parse_args(["--physics", "sticky"])).tissue.limiting_stretch == pytest.approx(TISSUE_LIMIT)
     gent = physics_from_args(p.parse_args(["--physics", "elastic", "--tissue-limit", "2.5"])).tissue
     assert gent.limiting_stretch == pytest.approx(2.5) and gent.mu == 800.0
+    assert physics_from_args(p.parse_args(["--physics", "sticky", "--tissue-limit", "inf"])).tissue.ijm == 0.0
 
 
 def test_absurd_transcript_length_and_msaa_are_refused_before_work(short, capsys):

@@ -129,9 +129,8 @@ def add_physics_arguments(p: argparse.ArgumentParser, default: str, choices: tup
                    "own count (12 on the default face; default 48, one per saliva slab; 0: the face's own, the "
                    "seed's mesh)")
     g.add_argument("--tissue-limit", type=float, metavar="L", help="the soft tissue stiffens without bound as its "
-                   "stretch, volume change taken out, nears L (Gent's law; default: none (inf), the seed's "
-                   "neo-Hookean tissue; 2.5 lets a strong --glue 0.3 go at full jaw, where the neo-Hookean lips stretch 7x "
-                   "and hold)")
+                   "stretch, volume change taken out, nears L (Gent's law; default 2.8: a strong --glue 0.3 lets go at "
+                   "full jaw; inf: the seed's neo-Hookean tissue, which never stiffens: the lips stretch 7x and hold)")
     g.add_argument("--film-corners", action=argparse.BooleanOptionalAction, default=None,
                    help="carry the saliva film into the mouth corners, where the lips meet (default: on; "
                    "--no-film-corners ends it at the last pair of lip vertices, the seed's film, whose unglued "

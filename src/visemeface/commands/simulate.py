@@ -21,20 +21,20 @@ EPILOG = """\
 examples:
   visemeface simulate open --glue 0.08 -o open.mp4        # jaw lowered and raised twice (seed 001 Fig. 18)
   visemeface simulate open --physics elastic -o open_elastic.mp4   # the same FEM without glue
-  visemeface simulate open-once -o zip.mp4               # the lips unzip from the centre (0.55 of the mouth by its end)
-  visemeface simulate open-once --rupture-time 0 --seam-elements 0 --no-film-corners -o seed.mp4   # the seed's model
+  visemeface simulate open-once -o zip.mp4               # the lips unzip from the centre (0.67 of the mouth by its end)
+  visemeface simulate open-once --rupture-time 0 --seam-elements 0 --no-film-corners --tissue-limit inf -o seed.mp4   # the seed's model
   visemeface simulate open-once --glue-profile centre=0.18 -o two.mp4   # glue strongest at the centre
   visemeface simulate open --evaporation 40 -o dry.mp4    # later openings unzip faster
   visemeface simulate open-once --side left -o left.mp4   # one-sided lower-lip pull: asymmetric opening
   visemeface simulate open -o open.mp4 --resume           # continue an interrupted run
 
 The lips are refined to 48 elements along the seam, the saliva strands thin
-over 0.03 s before they snap, and the film runs into the mouth corners (issue 16;
+over 0.03 s before they snap, the film runs into the mouth corners (issue 16;
 --seam-elements 0 --rupture-time 0 --no-film-corners: the seed's mesh and brittle
-film, which parts in one frame). The tissue is the seed's neo-Hookean, which never
-stiffens: under a strong glue (0.3) at full jaw the lips stretch 7x and hold.
-With --tissue-limit 2.5 it stiffens without bound toward a stretch of 2.5 (Gent)
-and the glue lets go.
+film, which parts in one frame), and the tissue stiffens without bound toward a
+stretch of 2.8 (Gent), so a strong glue (0.3) lets go at full jaw. With
+--tissue-limit inf it is the seed's neo-Hookean, which never stiffens: under that
+glue the lips stretch 7x and hold.
 
 Writes OUTPUT (MP4) and OUTPUT's stem + .saliva.csv (--csv; per frame: time,
 jaw, broken fraction of the film along the seam, number and span of openings

@@ -68,14 +68,15 @@ class PhysicsSettings:
     ``threads``: numba threads for the steps; None (the default) times a few steps at numba's thread count
     and at one, at the start and every :data:`THREAD_CHECK_SECONDS` of simulated time, and runs on the
     faster (:func:`~visemeface.runtime.faster_thread_count`; the result is the same bits at any count).
-    ``tissue_limit``: the tissue's limiting (isochoric) stretch (Gent; inf, the default: the seed's neo-Hookean).
+    ``tissue_limit``: the tissue's limiting (isochoric) stretch (Gent; inf, the default here: the seed's
+    neo-Hookean; :meth:`speech`: :data:`~visemeface.physics.materials.TISSUE_LIMIT`).
     ``seam_elements``: where the FEM face is built here from a face (:func:`physics_face`, the speech
     commands), its lips are refined to this many tissue elements along the seam
     (:func:`~visemeface.physics.face_model.build_fem_face`); None: the face's own elements.
 
     These defaults are the seed's model. The speech commands run :meth:`speech`: the same with the
-    lips refined along the seam, saliva strands that thin before they snap, and the film carried into
-    the mouth corners (issue 16).
+    lips refined along the seam, saliva strands that thin before they snap, the film carried into
+    the mouth corners and a tissue that stiffens (issue 16).
     """
 
     dt: float | None = None
@@ -116,14 +117,14 @@ class PhysicsSettings:
         runs on into the mouth corners (``film_corners``), where the lips meet: ended at the last
         pair of lip vertices it leaves the corners unglued, and they open as dark notches while the
         rest of the seam is stuck (on /f v/ and wide vowels in speech, and beside a held centre).
-        The tissue stays neo-Hookean (``tissue_limit`` inf): a limiting stretch lets a strong glue go
-        at full jaw, but shortens seed 001's double opening on its mouth-opening action to 5-7 frames (10
-        neo-Hookean) and, at 2.5, the first /b/ of "Bob moves five boats" to 2 frames (README's table).
+        The tissue stiffens toward :data:`~visemeface.physics.materials.TISSUE_LIMIT` (Gent; the seed's
+        neo-Hookean lips stretch 7x and hold under glue 0.3 at full jaw; the limit is chosen, its reason there).
         """
         from visemeface.face.refine import SEAM_ELEMENTS
+        from visemeface.physics.materials import TISSUE_LIMIT
         from visemeface.physics.saliva import RUPTURE_TIME
         base = {"seam_elements": SEAM_ELEMENTS, "saliva": SalivaParams(rupture_time=RUPTURE_TIME),
-                "film_corners": True}
+                "film_corners": True, "tissue_limit": TISSUE_LIMIT}
         return cls(**{**base, **changes})
 
 
