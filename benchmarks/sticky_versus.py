@@ -7,8 +7,8 @@ before it. This times the whole command (transcript -> simulated face -> rendere
 example ``transcripts/one_five_zero_zero_six.txt`` at 30 fps) three ways, each in a fresh process
 (:func:`_runner.run_child`): the version ``--rev`` (checked out into a temporary git worktree and
 run from its ``src/``), this checkout's speech default (lips refined along the seam, cohesive film
-into the corners) and this checkout with the seed's model (``--seam-elements 0 --rupture-time 0
---no-film-corners``). Each is run once untimed first, so numba's compiled cache is warm for all
+into the corners, the tissue that stiffens) and this checkout with the seed's model (``--seam-elements 0
+--rupture-time 0 --no-film-corners --tissue-limit inf``). Each is run once untimed first, so numba's compiled cache is warm for all
 three. One JSON line per timed run, then the ratios to the first.
 """
 
@@ -25,7 +25,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _runner import child, run_child  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-SEED = ["--seam-elements", "0", "--rupture-time", "0", "--no-film-corners"]
+SEED = ["--seam-elements", "0", "--rupture-time", "0", "--no-film-corners", "--tissue-limit", "inf"]
 
 
 def main(argv=None):

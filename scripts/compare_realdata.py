@@ -291,7 +291,8 @@ def main() -> int:
         c = correlation(real, synth, max_lag=5)
         sp = speech_correlation(real, synth, video)
         rows += phone_heights(real, synth, segments, sp["span_s"], clip)
-        limit = {"tissue_limit": TISSUE_LIMIT if args.tissue_limit is None else args.tissue_limit} if args.physics else {}
+        lim = TISSUE_LIMIT if args.tissue_limit is None else args.tissue_limit
+        limit = {"tissue_limit": lim if lim < float("inf") else "inf"} if args.physics else {}   # strict JSON
         print(json.dumps({"clip": clip, "text": text, "timing": timing, "physics": args.physics, **limit, "frames": n,
                           "open_frames_real": int((real["count"] > 0).sum()),
                           "open_frames_synth": int((synth["count"] > 0).sum()),

@@ -307,7 +307,7 @@ def fig_calibration(fem, rig, common, visemes=None):
 SPEECH = {"bob": "Bob moves five boats", "set_white": "set white with p two soon"}
 #: ``--posture V=D``: the speech figures with viseme V given viseme D's muscle vector, to test a posture
 #: as the cause of a release (e.g. iy=ey: the /iy/ of "p two" opened to 0.13 mouth widths, the real
-#: speaker's being 0.21 against our 0.06).
+#: speaker's being 0.21 against our 0.06 before /iy/'s refit; its target is now 0.12).
 SWAPS: dict[str, str] = {}
 
 

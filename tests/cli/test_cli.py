@@ -28,3 +28,12 @@ def test_help_lists_commands(capsys):
 def test_console_entry_point_runs():
     proc = subprocess.run([sys.executable, "-m", "visemeface", "--version"], capture_output=True, text=True)
     assert proc.returncode == 0 and __version__ in proc.stdout
+
+
+def test_simulate_help_gives_the_speech_lips_tissue_limit_the_code_uses(capsys):
+    """The epilogue's numbers are typed, the default is materials.TISSUE_LIMIT: they must agree."""
+    from visemeface.physics.materials import TISSUE_LIMIT
+    with pytest.raises(SystemExit):
+        main(["simulate", "--help"])
+    out = " ".join(capsys.readouterr().out.split())
+    assert f"stretch of {TISSUE_LIMIT:g} (Gent)" in out and f"default {TISSUE_LIMIT:g}" in out

@@ -457,6 +457,7 @@ def test_the_speech_lips_glue_the_mouth_corners_unless_told_not_to():
     gent = physics_from_args(p.parse_args(["--physics", "elastic", "--tissue-limit", "2.5"])).tissue
     assert gent.limiting_stretch == pytest.approx(2.5) and gent.mu == 800.0
     assert physics_from_args(p.parse_args(["--physics", "sticky", "--tissue-limit", "inf"])).tissue.ijm == 0.0
+    assert f"default {TISSUE_LIMIT:g}" in " ".join(p.format_help().split())        # --help says the same
 
 
 def test_absurd_transcript_length_and_msaa_are_refused_before_work(short, capsys):

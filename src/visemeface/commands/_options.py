@@ -110,7 +110,7 @@ def sinks_from_args(args, default_video: Path, defaults: dict | None = None) -> 
 # --------------------------------------------------------------------------- physics
 
 def add_physics_arguments(p: argparse.ArgumentParser, default: str, choices: tuple[str, ...]) -> argparse._ArgumentGroup:
-    """``--physics`` and the saliva options (their defaults: :class:`PhysicsSettings`')."""
+    """``--physics`` and the saliva options (their defaults: :meth:`PhysicsSettings.speech`'s)."""
     g = p.add_argument_group("physics (sticky lips: a finite-element lower face, saliva between the lips)")
     g.add_argument("--physics", choices=choices, default=default,
                    help="sticky: the FEM face with saliva that glues the lips until it breaks; elastic: the same "

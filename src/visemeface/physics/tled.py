@@ -800,8 +800,8 @@ class TLEDSolver:
                 else "a non-finite deformation (NaN/inf displacement)" if not np.isfinite(J)
                 else f"J = {J:.4g} <= 0 (inverted)")
         advice = ("This motion stretches the tissue further than its limit allows: raise the limit (--tissue-limit; "
-                  f"{TISSUE_LIMIT:g} holds on the default face at glue 0.3 and full jaw; inf: none) or lower the glue "
-                  "(a smaller dt does not help)"
+                  f"the default, {TISSUE_LIMIT:g}, holds on the default face at glue 0.3 and full jaw; inf: the seed's "
+                  "neo-Hookean tissue, which never stiffens) or lower the glue (a smaller dt does not help)"
                   if limit else f"Reduce dt (now {self.dt:.4g} s, stable limit {self.stable_dt:.4g} s), loads or "
                   f"prescribed motion, or raise damping")
         raise SimulationDiverged(
