@@ -111,7 +111,8 @@ def synthetic_profile(segments, fps: float, n_frames: int, detector, physics: st
         from visemeface.animate import simulated_motion
         from visemeface.physics.drive import PhysicsSettings
         motion = simulated_motion(rig, track, physics,          # the speech commands' FEM face
-                                  PhysicsSettings.speech(**({} if tissue_limit is None else {"tissue_limit": tissue_limit})))
+                                  PhysicsSettings.speech() if tissue_limit is None
+                                  else PhysicsSettings.speech(tissue_limit=tissue_limit))
     with Renderer(motion.render_face, size=(256, 256), view="mouth") as renderer:
         box = renderer.mouth_box()
         frames = [renderer.render(f.vertices) for f in motion.frames()][:n_frames]
@@ -271,6 +272,8 @@ def main() -> int:
     if args.tissue_limit is not None and not args.physics:
         print("compare_realdata: --tissue-limit needs --physics sticky or elastic", file=sys.stderr)
         return 2
+    tissue_limit = TISSUE_LIMIT if args.tissue_limit is None else args.tissue_limit      # speak's unless given
+    limit = {"tissue_limit": tissue_limit if tissue_limit < float("inf") else "inf"} if args.physics else {}  # strict JSON
     videos = sorted(args.realdata.glob("*.mpg"))
     if not videos:
         print(f"compare_realdata: no GRID clip (*.mpg) in {args.realdata} (--realdata: the folder of "
@@ -286,13 +289,11 @@ def main() -> int:
         text = grid_sentence(clip)
         real, fps, n = real_profile(video, detector)
         segments, timing = timed_segments(video, text, args.timing, n / fps)
-        synth = synthetic_profile(segments, fps, n, detector, args.physics, args.tissue_limit)
+        synth = synthetic_profile(segments, fps, n, detector, args.physics, tissue_limit)
         d = l2_distance(real, synth)
         c = correlation(real, synth, max_lag=5)
         sp = speech_correlation(real, synth, video)
         rows += phone_heights(real, synth, segments, sp["span_s"], clip)
-        lim = TISSUE_LIMIT if args.tissue_limit is None else args.tissue_limit
-        limit = {"tissue_limit": lim if lim < float("inf") else "inf"} if args.physics else {}   # strict JSON
         print(json.dumps({"clip": clip, "text": text, "timing": timing, "physics": args.physics, **limit, "frames": n,
                           "open_frames_real": int((real["count"] > 0).sum()),
                           "open_frames_synth": int((synth["count"] > 0).sum()),
