@@ -3,7 +3,7 @@
 Prints one JSON line per case:
 
 - ``detect``: :class:`OpeningDetector` on frames already in memory (the
-  analysis itself), for the default ``lips`` method and seed 001's,
+  analysis itself), for the default ``mesh`` method, the colour ``lips`` method and seed 001's,
 - ``decode+detect``: the whole ``analyze`` path from a video file decoded by
   imageio-ffmpeg (ffmpeg start-up included), without writing outputs,
 - ``grid``: the real GRID clips of ../shared/realdata (360x288 MPEG-1, 75 frames,
@@ -61,12 +61,12 @@ def write_video(frames, path: Path, fps: float = 30.0, codec: str = "libx264") -
     writer.close()
 
 
-def bench_source(path: Path, box, repeat: int = 3) -> tuple[float, int]:
+def bench_source(path: Path, box, repeat: int = 3, detector: OpeningDetector | None = None) -> tuple[float, int]:
     """Best frames/s of decode + (find the mouth) + measure over ``repeat`` runs."""
     best, n = np.inf, 0
     for _ in range(repeat):
         t0 = time.perf_counter()
-        df, _ = analyze_source(open_frames(path), box)
+        df, _ = analyze_source(open_frames(path), box, detector)
         best = min(best, time.perf_counter() - t0)
         n = len(df)
     return n / best, n
@@ -93,7 +93,8 @@ def main() -> None:
         if args.case and name not in args.case:
             continue
         frames = list(merging_mouth_frames(n, n // 2, size, box))
-        for label, det in (("lips", OpeningDetector()), ("seed", OpeningDetector(method="seed")),
+        for label, det in (("mesh", OpeningDetector()), ("lips", OpeningDetector(method="lips")),
+                           ("seed", OpeningDetector(method="seed")),
                            ("seed hull+teeth", OpeningDetector(method="seed", hull=True, teeth=True))):
             print(json.dumps({"bench": "analyze.detect", "case": name, "settings": label, "frames": n,
                               "mouth_width_px": box[2], "frames_per_s": round(bench_detect(frames, box, det), 1),
@@ -106,7 +107,7 @@ def main() -> None:
             path = Path(tmp) / ("bench.mpg" if name == "grid" else "bench.mp4")
             write_video(clean, path, 25.0 if name == "grid" else 30.0, "mpeg1video" if name == "grid" else "libx264")
             fps, _ = bench_source(path, box, repeat=1 if name == "1080p" else 3)
-        print(json.dumps({"bench": "analyze.decode+detect", "case": name, "settings": "lips, given box",
+        print(json.dumps({"bench": "analyze.decode+detect", "case": name, "settings": "mesh, given box",
                           "frames": n, "mouth_width_px": box[2], "frames_per_s": round(fps, 1), **common}), flush=True)
     clips = sorted(args.realdata.glob("*.mpg")) if args.realdata.is_dir() else []
     for clip in clips:
@@ -114,9 +115,11 @@ def main() -> None:
 
         boxes = track_mouth(list(open_frames(clip).frames()))
         given = boxes[len(boxes) // 2]
-        for label, box in (("given box", given), ("automatic box", None)):
-            fps, frames = bench_source(clip, box)
-            print(json.dumps({"bench": "analyze.grid", "case": clip.stem, "settings": f"lips, {label}",
+        # the default method ("mesh") and the previous default ("lips") in the same run
+        for method, label, box in (("mesh", "given box", given), ("mesh", "automatic box", None),
+                                   ("lips", "automatic box", None)):
+            fps, frames = bench_source(clip, box, detector=OpeningDetector(method=method))
+            print(json.dumps({"bench": "analyze.grid", "case": clip.stem, "settings": f"{method}, {label}",
                               "box": box_method if box is None else "given",
                               "frames": frames, "mouth_width_px": given.mouth_width, "frames_per_s": round(fps, 1),
                               "target_frames_per_s": 200, **common}), flush=True)

@@ -92,10 +92,10 @@ def extract_audio(video: Path, wav: Path) -> None:
 
 
 def synthetic_profile(segments, fps: float, n_frames: int, detector, physics: str | None = None,
-                      tissue_limit: float | None = None):
+                      tissue_limit: float | None = None, jali=None):
     """Render the default face along the segments (kinematic, or the FEM face with ``physics`` sticky or
     elastic as ``speak --physics [--tissue-limit]`` runs it; ``tissue_limit`` None: speak's) and analyse it: the
-    profile."""
+    profile. ``jali``: per-segment (ja, li) articulation factors (:mod:`visemeface.speech.articulation`)."""
     from visemeface.analysis.profiles import analyze_frames
     from visemeface.motion import KinematicMotion
     from visemeface.muscles.rig import default_rig
@@ -104,7 +104,7 @@ def synthetic_profile(segments, fps: float, n_frames: int, detector, physics: st
     from visemeface.speech.timeline import activation_track
 
     rig = default_rig()
-    track = activation_track(segments, load_visemes(), fps=fps)
+    track = activation_track(segments, load_visemes(), fps=fps, jali=jali)
     if physics is None:
         motion = KinematicMotion(rig, track)
     else:
@@ -140,14 +140,12 @@ def speech_correlation(real, synth, video: Path, max_lag: int = 5) -> dict:
     floor); both profiles are cut to it before :func:`~visemeface.analysis.profiles.correlation`.
     Returns ``{"span_s": (t0, t1), "r": r at lag 0, "lag": frames, "r_lag": r there}``.
     """
-    from visemeface.analysis.profiles import correlation
+    from visemeface.analysis.profiles import correlation, within
     from visemeface.speech.audio import read_audio, speech_span
 
     samples, rate = read_audio(video)
     t0, t1 = speech_span(samples, rate)
-    cut = [df[(df["time"] >= t0) & (df["time"] <= t1)].reset_index(drop=True) for df in (real, synth)]
-    for df, whole in zip(cut, (real, synth)):
-        df.attrs.update(whole.attrs)
+    cut = [within(df, t0, t1) for df in (real, synth)]
     c = correlation(*cut, columns=("height",), max_lag=max_lag)
     return {"span_s": (round(t0, 2), round(t1, 2)), "r": c["r"]["height"], "lag": c["lag"], "r_lag": c["r_lag"]}
 

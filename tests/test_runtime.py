@@ -115,3 +115,23 @@ def test_faster_thread_count_keeps_the_count_that_ran_faster():
         assert runtime.faster_thread_count(lambda: None, 1) == 1
     finally:
         numba.set_num_threads(before)
+
+
+def test_the_threading_layer_is_found_without_importing_numba_and_agrees_with_its_import(monkeypatch):
+    """Finding OpenMP imported numba (a fifth of a second) in every command, even one refusing its input."""
+    monkeypatch.delenv("NUMBA_THREADING_LAYER", raising=False)
+    code = ("import sys, json\nfrom visemeface import runtime\nlayer = runtime.threading_layer()\n"
+            "seen = 'numba' in sys.modules\ntry:\n    from numba.np.ufunc import omppool\n    real = 'omp'\n"
+            "except ImportError:\n    real = 'workqueue'\nprint(json.dumps([layer, real, seen]))")
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_THREADING_LAYER"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
+    layer, real, seen = json.loads(out.stdout.strip().splitlines()[-1])
+    assert layer == real and not seen
+
+
+def test_a_refused_command_imports_neither_the_solver_nor_numba(tmp_path):
+    code = ("import sys\nfrom visemeface.cli import main\n"
+            "assert main(['speak', 'nothing-here.txt', '-o', 'x.mp4']) == 2\n"
+            "print(sorted(m for m in ('numba', 'scipy', 'visemeface.physics.simulation') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path, check=True)
+    assert out.stdout.strip().splitlines()[-1] == "[]", out.stdout

@@ -55,6 +55,31 @@ def _to_the_audio(audio, utterance, fps):
     return utterance.lasting(audio_s)
 
 
+def recording_acoustics(audio):
+    """The :class:`~visemeface.speech.acoustics.Acoustics` of a recording (path)."""
+    from visemeface.speech.acoustics import analyse
+    from visemeface.speech.audio import read_audio
+
+    return analyse(*read_audio(audio))
+
+
+def jali_factors(utterance, acoustics=None, articulation: float = 1.0):
+    """Per-segment (ja, li) of :mod:`visemeface.speech.articulation` for ``utterance``: from ``acoustics``
+    where given, else from the phones' lexical stress (:meth:`Utterance.phone_stress`); None
+    (the tabled visemes) at articulation 0 or with neither."""
+    from visemeface.speech.articulation import acoustic_scales, check_articulation, stress_scales
+
+    if check_articulation(articulation) == 0:
+        return None
+    seg = utterance.segments
+    if acoustics is not None:
+        return acoustic_scales(acoustics, seg["start"], seg["end"], seg["phoneme"], articulation)
+    stress = utterance.phone_stress()
+    if stress is not None:
+        return stress_scales(seg["phoneme"], *stress, articulation=articulation)
+    return None
+
+
 def simulated_motion(rig, track, physics: str, settings=None):
     """The FEM face of ``rig.face`` driven by ``track`` (every setting checked before any step); ``settings``
     default to :meth:`PhysicsSettings.speech` (the lips refined along the seam: the motion renders
@@ -68,7 +93,7 @@ def simulated_motion(rig, track, physics: str, settings=None):
 def animate(utterance, sinks: list, render=None, *, rig=None, emotions=None, interp: str | None = None,
             fps: float = 30.0, audio=None, physics: str | None = None, physics_settings=None,
             checkpoint: Callable | None = None, resume: bool = False, show_progress: bool = True, source: str = "text",
-            blink: bool = True):
+            blink: bool = True, articulation: float = 1.0, gestures: bool = True, seed: int = 0):
     """Animate ``utterance`` into ``sinks``; returns the run's :class:`~visemeface.pipeline.RunStats`.
 
     Parameters
@@ -99,6 +124,16 @@ def animate(utterance, sinks: list, render=None, *, rig=None, emotions=None, int
         Where the utterance came from (a transcript's path, or "text"), recorded by exports that name it.
     blink : bool
         Blink at a natural rate (:func:`visemeface.speech.blinks.blink_utterance`, deterministic).
+    articulation : float
+        0..2: how much the recording's acoustics (``audio``), else the text's lexical stress, widen or
+        narrow each phone's jaw and lip action (:mod:`visemeface.speech.articulation`, JALI); 0 plays the
+        tabled visemes exactly.
+    gestures : bool
+        Head nods and turns, brow raises and gaze from the prosody (:mod:`visemeface.speech.gestures`):
+        the brows and eyes in the track, the head's rotation in the run's ``extra["head"]`` (degrees,
+        yaw/pitch/roll per frame) for the renderer, Live Link and glTF.
+    seed : int
+        The gestures' (deterministic) random choices.
     """
     from visemeface import pipeline
     from visemeface.motion import KinematicMotion
@@ -119,12 +154,22 @@ def animate(utterance, sinks: list, render=None, *, rig=None, emotions=None, int
     rig = rig if rig is not None else default_rig()
     emotions = parse_emotions(emotions, load_expressions(rig=rig).index)
     ranges = {n: tuple(r) for n, r in zip(rig.names, rig.ranges)}
+    acoustics = recording_acoustics(audio) if audio is not None and (articulation > 0 or gestures) else None
     track = activation_track(utterance, load_visemes(rig=rig), fps=fps, mode=interp or MODES[0],
-                             emotions=emotions or None, ranges=ranges)
+                             emotions=emotions or None, ranges=ranges,
+                             jali=jali_factors(utterance, acoustics, articulation))
     if blink:
         from visemeface.speech.blinks import blink_utterance
 
         track = blink_utterance(track, rig, utterance)
+    extra = {}
+    if gestures:
+        from visemeface.speech.gestures import add_face_gestures, speech_gestures
+
+        moves = speech_gestures(utterance, len(track), fps, acoustics, seed=seed)
+        extra["track_without_gestures"] = track     # for outputs whose vocabulary has no brow raise (VRM)
+        track = add_face_gestures(track, rig.names, moves)
+        extra["head"] = moves.head
     if physics is None or physics == "none":
         motion = KinematicMotion(rig, track)
     else:
@@ -132,6 +177,6 @@ def animate(utterance, sinks: list, render=None, *, rig=None, emotions=None, int
     return pipeline.run(motion, sinks, render,
                         info=dict(audio=audio, rig=rig, track=track, end_time=utterance.end,
                                   extra={"motion_key": motion.key(), "utterance": utterance,
-                                         "interp": interp or MODES[0], "source": source}),
+                                         "interp": interp or MODES[0], "source": source, **extra}),
                         checkpoint=checkpoint(motion) if checkpoint is not None else None,
                         resume=resume, show_progress=show_progress)

@@ -12,9 +12,14 @@ Exit statuses (:data:`EXIT`): 0 done, 2 bad input, 3 simulation diverged,
 
 from __future__ import annotations
 
-import difflib
+import os
 from collections.abc import Iterable
-from pathlib import Path
+
+
+def one_line(text: str) -> str:
+    """``text`` with its control characters (a newline or tab read from a user's file) written as escapes,
+    so that a message quoting what a file held stays one line."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in str(text))
 
 
 class VisemefaceError(Exception):
@@ -34,13 +39,13 @@ class InputError(VisemefaceError, ValueError):
         1-based line number in ``path``.
     """
 
-    def __init__(self, message: str, path: str | Path | None = None, line: int | None = None):
+    def __init__(self, message: str, path: str | os.PathLike | None = None, line: int | None = None):
         self.path = None if path is None else str(path)
         self.line = line
-        self.reason = message
+        self.reason = message = one_line(message)
         where = ""
         if self.path is not None:
-            where = self.path + (f":{line}" if line is not None else "") + ": "
+            where = one_line(self.path) + (f":{line}" if line is not None else "") + ": "
         super().__init__(where + message)
 
 
@@ -75,6 +80,8 @@ def exit_status(exc: BaseException) -> int:
 
 def close_matches(name: str, known: Iterable[str], n: int = 3) -> str:
     """Return a hint like ``" (did you mean: a, b?)"`` or ``""``."""
+    import difflib
+
     matches = difflib.get_close_matches(name, list(known), n=n, cutoff=0.5)
     return f" (did you mean: {', '.join(matches)}?)" if matches else ""
 

@@ -102,6 +102,11 @@ class Motion:
         """Frames ``start … n_frames-1`` (a resumable motion continues from ``state``)."""
         raise NotImplementedError
 
+    def still_vertices(self):
+        """(N,) bool: the render face's vertices every frame leaves at rest (the renderer may then leave
+        out triangles hidden at rest, :mod:`visemeface.render.culling`), or None where none is known."""
+        return None
+
     def frame(self, index: int) -> Frame:
         """Frame ``index`` alone (kinematic motions only)."""
         raise NotImplementedError
@@ -135,6 +140,9 @@ class KinematicMotion(Motion):
         self.fps = track_fps(track)
         self.activations = rig.clamp(rig.track_matrix(track))
         self.n_frames = len(self.activations)
+
+    def still_vertices(self):
+        return self.rig.still_vertices(self.activations)
 
     def frame(self, index: int) -> Frame:
         v = np.asarray(self.rig.pose(self.activations[index]), dtype=np.float32)

@@ -16,6 +16,7 @@ every temporary of that target whose process is gone (:func:`remove_stale`).
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import os
 import re
 import shutil
@@ -25,6 +26,11 @@ from pathlib import Path
 from tqdm import tqdm
 
 from visemeface.errors import InputError
+
+
+#: Where :meth:`Staged.commit` notes each output it puts in place while set to a list (the Python API's
+#: :class:`visemeface.api.Result` reads it); None, the default, notes nothing.
+WRITTEN: contextvars.ContextVar[list | None] = contextvars.ContextVar("visemeface_written", default=None)
 
 
 def _umask_mode(mode: int) -> int:
@@ -70,7 +76,7 @@ def check_new(path: str | Path, force: bool = False, folder: bool | None = None,
     path = output_path(path)
     if path.exists() or path.is_symlink():
         if not force:
-            raise InputError("output exists; use --force to overwrite (force=True in Python)", path)
+            raise InputError("output exists; use --force to overwrite", path)
         if folder is False and path.is_dir():
             raise InputError("output exists and is a folder, not a file", path)
         if folder is True and not path.is_dir():
@@ -89,7 +95,22 @@ def check_new(path: str | Path, force: bool = False, folder: bool | None = None,
         raise InputError("output folder is not a folder", parent)
     if not os.access(parent, os.W_OK | os.X_OK):
         raise InputError("output folder is not writable", parent)
+    _probe(path)
     return path
+
+
+def _probe(path: Path) -> None:
+    """Create and remove the temporary ``path`` would be staged in: access() says yes to root everywhere,
+    and some folders take no new file at all (``/proc``), which was found only after the work."""
+    probe = _temporary_name(path).with_name(_temporary_name(path).name + "probe")
+    try:
+        fd = os.open(probe, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600)
+    except FileExistsError:
+        return
+    except OSError as exc:
+        raise InputError(f"cannot write in the output folder ({exc.strerror})", path.parent) from None
+    os.close(fd)
+    os.unlink(probe)
 
 
 def check_not_inputs(targets, inputs, what: str = "an input") -> None:
@@ -152,6 +173,10 @@ def remove_stale(path: str | Path) -> list[Path]:
 class Staged:
     """One output written under a temporary name, renamed into place by :meth:`commit`.
 
+    The target is checked when the object is made (before any work); :meth:`open`
+    creates the temporary (removing stale ones of the same target) and returns it;
+    :meth:`commit` renames it into place; :meth:`abort` removes it.
+
     Parameters
     ----------
     path : str or Path
@@ -162,10 +187,6 @@ class Staged:
         Stage a folder instead of a file.
     ours : callable
         For a folder: whether an existing one may be replaced (:func:`check_new`).
-
-    The target is checked when the object is made (before any work); :meth:`open`
-    creates the temporary (removing stale ones of the same target) and returns it;
-    :meth:`commit` renames it into place; :meth:`abort` removes it.
     """
 
     def __init__(self, path: str | Path, force: bool = False, folder: bool = False, ours=holds_only_ours):
@@ -191,6 +212,9 @@ class Staged:
         if self.folder and self.path.is_dir():
             shutil.rmtree(self.path)          # os.replace cannot replace a non-empty folder
         os.replace(tmp, self.path)
+        noted = WRITTEN.get()
+        if noted is not None:
+            noted.append(self.path)
         return self.path
 
     def abort(self) -> None:

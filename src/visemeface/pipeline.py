@@ -29,6 +29,7 @@ look at, and the next run (with other options) starts afresh.
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import dataclasses
 from dataclasses import dataclass, field
 
@@ -68,6 +69,11 @@ class RenderSettings:
         return f"{self.size}/{self.view}/msaa{self.msaa}"
 
 
+#: Where :func:`run` notes the :class:`RunStats` of each run while set to a list (the Python API's
+#: :class:`visemeface.api.Result` reads it); None, the default, notes nothing.
+RUNS: contextvars.ContextVar[list | None] = contextvars.ContextVar("visemeface_runs", default=None)
+
+
 @dataclass
 class RunStats:
     """What a run did: frames in all, made live (simulated or posed), replayed from a checkpoint,
@@ -92,10 +98,21 @@ def _image(frame, renderer, sinks, stats) -> None:
     stats.rendered += 1
 
 
-def _feed(frame, renderer, sinks, stats, n_vertices: int) -> None:
-    """Render ``frame`` (all its vertices: the motion's render face) and write it (the face's vertices)."""
+def _feed(frame, renderer, sinks, stats, n_vertices: int, head=None) -> None:
+    """Render ``frame`` (all its vertices: the motion's render face; turned by ``head``, (pivot, (F, 3) degrees),
+    where given) and write it (the face's vertices, never turned)."""
     if renderer is not None:
-        _image(frame, renderer, sinks, stats)
+        if head is not None:
+            from visemeface.speech.gestures import rotate_head
+
+            pivot, angles = head
+            posed = frame
+            frame = dataclasses.replace(frame, vertices=rotate_head(frame.vertices,
+                                                                     angles[min(frame.index, len(angles) - 1)], pivot))
+            _image(frame, renderer, sinks, stats)
+            frame = dataclasses.replace(posed, image=frame.image)
+        else:
+            _image(frame, renderer, sinks, stats)
     if len(frame.vertices) > n_vertices:
         frame = dataclasses.replace(frame, vertices=frame.vertices[:n_vertices])
     for s in sinks:
@@ -137,16 +154,33 @@ def run(motion: Motion, sinks: list[Sink], render: RenderSettings | None = None,
         if need_image:
             from visemeface.render.renderer import Renderer
 
+            # a turned head moves every vertex: no still ones to cull by
+            still = motion.still_vertices() if run_info.extra.get("head") is None else None
             renderer = stack.enter_context(Renderer(motion.render_face, size=(render.size, render.size),
-                                                    view=render.view, samples=render.msaa))
+                                                    view=render.view, samples=render.msaa, still=still))
             run_info.size, run_info.mouth_box = render.size, renderer.mouth_box()
+        head = None
+        if run_info.extra.get("head") is not None:
+            import numpy as np
+
+            from visemeface.motion import digest
+            from visemeface.speech.gestures import head_pivot
+
+            angles = np.asarray(run_info.extra["head"], dtype=np.float64)
+            head = (head_pivot(motion.face.vertices), angles)
+            run_info.extra.setdefault("render_key", f"{render.key()}/head:{digest(angles)[:16]}")
         run_info.extra.setdefault("render_key", render.key())
         opened = []
         try:
             for s in sinks:
-                s.open(run_info)
+                try:
+                    s.open(run_info)
+                except BaseException:       # a sink refused in its opening (a rig not found): its own
+                    for staged in s.staged:  # temporaries go too, not only the others'
+                        staged.abort()
+                    raise
                 opened.append(s)
-            _stream(motion, sinks, renderer, checkpoint, done, state, checkpoint_every, stats, show_progress)
+            _stream(motion, sinks, renderer, checkpoint, done, state, checkpoint_every, stats, show_progress, head)
             for s in sinks:
                 s.close()
         except BaseException as exc:
@@ -161,21 +195,24 @@ def run(motion: Motion, sinks: list[Sink], render: RenderSettings | None = None,
             stats.written += s.commit()
     if checkpoint is not None:
         checkpoint.remove()
+    noted = RUNS.get()
+    if noted is not None:
+        noted.append(stats)
     return stats
 
 
-def _stream(motion, sinks, renderer, checkpoint, done, state, every, stats, show_progress) -> None:
+def _stream(motion, sinks, renderer, checkpoint, done, state, every, stats, show_progress, head=None) -> None:
     bar = progress(total=motion.n_frames, desc=motion.label, show=show_progress)
     with bar:
         for i in range(done):                 # finished before an interruption: replay, do not simulate
-            _feed(checkpoint.replay(i), renderer, sinks, stats, motion.face.n_vertices)
+            _feed(checkpoint.replay(i), renderer, sinks, stats, motion.face.n_vertices, head)
             stats.replayed += 1
             bar.update(1)
         record = checkpoint is not None and motion.resumable
         if record:
             checkpoint.start(done)
         for frame in motion.frames(done, state):
-            _feed(frame, renderer, sinks, stats, motion.face.n_vertices)
+            _feed(frame, renderer, sinks, stats, motion.face.n_vertices, head)
             stats.live += 1
             bar.update(1)
             if record:

@@ -17,7 +17,7 @@ behaviour call it themselves. What it sets, and why:
   step of the FEM face is one compiled call with two parallel loops and about
   0.1 ms of Python around it; a worker that fell asleep in that gap is woken
   for the next step, which on this 2-core virtual machine cost more than the
-  second thread gained. Sticky face, 2 threads, idle machine (issue 17): 435 µs
+  second thread gained. Sticky face, 2 threads, idle machine: 435 µs
   a step at 1000, 305 µs at 10,000, 290 µs at 30,000 and 100,000; 1 thread
   345 µs. The default (300,000) is worse under load: with another busy process
   on the 2 cores a spinning worker holds the core the main thread needs (12 ms a
@@ -56,6 +56,10 @@ BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THR
 
 #: Barrier spin of GNU OpenMP (see the module docstring).
 GOMP_SPINCOUNT = "10000"
+#: Per-frame geometry (normals, the rig's pose) of a mesh with at least this many vertices runs in numba
+#: kernels: a process's first kernel costs about 0.5 s (numba's start), paid back within a few frames of a
+#: scanned head (5 ms a frame on the ICT head's 24,591 vertices) but never on the default face (under 1 ms).
+COMPILED_FROM_VERTICES = 10_000
 
 
 def _writable_cache_dir() -> str | None:
@@ -75,15 +79,28 @@ def _writable_cache_dir() -> str | None:
 
 
 def threading_layer() -> str:
-    """The threading layer :func:`configure` pins: the user's choice, else the first available."""
+    """The threading layer :func:`configure` pins: the user's choice, else the first available.
+
+    OpenMP is available where numba's ``omppool`` extension loads with its libgomp: the library is loaded
+    (``ctypes``, which resolves its dependencies) without importing numba, which costs a fifth of a second
+    that a command refusing its input should not pay.
+    """
+    import ctypes
+    import importlib.util
+
     chosen = os.environ.get("NUMBA_THREADING_LAYER")
     if chosen:
         return chosen
-    try:
-        from numba.np.ufunc import omppool  # noqa: F401  (importable where libgomp loads)
-    except ImportError:
-        return "workqueue"
-    return "omp"
+    spec = importlib.util.find_spec("numba")
+    folders = list(spec.submodule_search_locations or []) if spec is not None else []
+    pools = [p for f in folders for p in (Path(f) / "np" / "ufunc").glob("omppool*.so")]
+    for pool in pools:
+        try:
+            ctypes.CDLL(str(pool))
+        except OSError:
+            continue
+        return "omp"
+    return "workqueue"
 
 
 def configure(threads: int | None = None, environ=None) -> dict:

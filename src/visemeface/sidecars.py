@@ -60,14 +60,14 @@ def read_video_sidecar(path: str | Path) -> Sidecar:
     from visemeface.analysis.openings import MouthBox
 
     path = Path(path)
+    from visemeface.textfile import parse_json
+
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = parse_json(path.read_text(encoding="utf-8"), path)
     except FileNotFoundError:
         raise InputError("no such file", path) from None
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"cannot read: {exc}", path) from None
-    except json.JSONDecodeError as exc:
-        raise InputError(f"not valid JSON: {exc.msg}", path, exc.lineno) from None
     if not isinstance(data, dict) or "mouth_box" not in data:
         raise InputError('expected a JSON object with "mouth_box": [x, y, w, h]', path)
     try:

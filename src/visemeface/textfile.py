@@ -38,3 +38,19 @@ def read_text(path, what: str = "file") -> str:
     except OSError as exc:
         raise InputError(f"cannot read the {what} ({exc.strerror or exc.__class__.__name__})", path) from None
     return decode(raw, path)
+
+
+def parse_json(text: str, path=None):
+    """The value of JSON ``text``; an :class:`InputError` naming ``path`` (and the line) for text that is not
+    JSON, or JSON nested too deeply or holding a number too long to read (Python refuses integers of over
+    4,300 digits), instead of the parser's RecursionError or ValueError."""
+    import json
+
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InputError(f"not valid JSON: {exc.msg} (column {exc.colno})", path, exc.lineno) from None
+    except RecursionError:
+        raise InputError("not usable JSON: nested too deeply", path) from None
+    except ValueError:                     # "Exceeds the limit (4300 digits) for integer string conversion"
+        raise InputError("not usable JSON: a number of over 4300 digits", path) from None

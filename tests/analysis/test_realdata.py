@@ -162,3 +162,41 @@ def test_analyze_source_takes_a_path_as_it_takes_a_frame_source(realdata):
     by_source, _ = analyze_source(open_frames(realdata / "bbaf2n.mpg"))
     assert len(by_path) == 75 and len(boxes) == 75
     pd.testing.assert_frame_equal(by_path, by_source)
+
+
+def test_mirrored_clips_agree_with_the_hand_labels(realdata):
+    """The default method on the left-right mirrored clips (scripts/analysis_fairness.py's 'mirrored'
+    group; its other groups -- darkened skin, moustache, grey, low contrast -- are measured there)."""
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
+    import analysis_fairness as af
+
+    import tempfile
+
+    cache = Path(tempfile.gettempdir()) / "visemeface_fairness"
+    rows = pd.DataFrame(af.real_rows(realdata, ["mirrored"], OpeningDetector(), cache, CLIPS))
+    assert (rows["open"] == rows["found"]).mean() >= 0.95, rows.to_string()
+    both = rows[(rows["open"] == 1) & (rows["found"] == 1)]
+    # the originals hold +-2 px; mirrored, the resampling grid falls differently: 2.12 px measured
+    assert ((both["found_px"] - both["height_px"]).abs() <= 2.25).all(), both.to_string()
+    assert rows["outside"].sum() == 0
+
+
+def test_darkened_copy_lowers_the_skin_by_40_lightness_units_and_spares_the_teeth(realdata):
+    """The 'dark' group of scripts/analysis_fairness.py is what it says: skin L* down by >= 40."""
+    from visemeface.analysis import augment
+
+    frames = list(open_frames(realdata / "swwp2s.mpg").frames())[:1]
+    pts = landmarks.FaceTracker()(frames[0]) if landmarks.available() else None
+    if pts is None:
+        pytest.skip("needs the face mesh (visemeface[track])")
+    f = augment.darkening_factor(frames[0], pts)
+    dark = augment.darken_skin(frames[0], pts, f)
+    outer = pts[landmarks.settings()["mouth"]["outer"]]
+    lips = augment._poly(frames[0].shape, outer).astype(bool)
+    ring = cv2.dilate(lips.view(np.uint8), np.ones((25, 25), np.uint8)).astype(bool) & ~lips
+    drop = np.median(augment._lightness(frames[0])[ring]) - np.median(augment._lightness(dark)[ring])
+    assert drop >= 40, drop
+    assert augment.grey(frames[0]).std(axis=2).max() == 0
+    np.testing.assert_array_equal(augment.mirror(augment.mirror(frames[0])), frames[0])

@@ -230,3 +230,23 @@ def test_a_cluster_that_fails_is_named_in_the_report_not_called_an_interrupt(tmp
         run(_jobs(tmp_path, 2), tmp_path / "out", client=NoWorkers(), show_progress=False)
     errors = {r["error"] for r in read_report(tmp_path / "out" / REPORT)}
     assert errors == {"not made: the batch stopped: RuntimeError: Nanny failed to start."}
+
+
+@pytest.mark.parametrize("existed", [False, True])
+def test_an_interrupt_before_any_clip_leaves_no_folder_it_made(tmp_path, monkeypatch, existed):
+    """An interrupted batch left its new folder with a report of clips "not made" and nothing else: a
+    finished-looking output. A folder that was there before (a batch being resumed) keeps its report."""
+    from visemeface.batch import runner
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(runner, "_submit", interrupted)
+    out = tmp_path / "out"
+    if existed:
+        out.mkdir()
+    with pytest.raises(KeyboardInterrupt):
+        run(_jobs(tmp_path, 2), out, show_progress=False)
+    assert out.exists() == existed
+    if existed:
+        assert {r["status"] for r in read_report(out / REPORT)} == {"failed"}

@@ -125,7 +125,7 @@ def test_bad_inputs_exit_2_with_one_line(tmp_path, capsys, frame_dir):
     err = _error(capsys, "analyze", blue, "-o", out)
     assert "no face found" in err and "--box" in err
     assert "--method" in _error(capsys, "analyze", frame_dir, "--box", BOX, "-o", out, "--method", "dark")
-    assert "min_height" in _error(capsys, "analyze", frame_dir, "--box", BOX, "-o", out, "--min-height", "2")
+    assert "--min-height" in _error(capsys, "analyze", frame_dir, "--box", BOX, "-o", out, "--min-height", "2")
     assert "no such file" in _error(capsys, "analyze", tmp_path / "none.mp4", "--box", BOX, "-o", out)
     assert "--threshold" in _error(capsys, "analyze", frame_dir, "--box", BOX, "-o", out, "--threshold", "dark")
     assert "--pad" in _error(capsys, "analyze", frame_dir, "--box", BOX, "-o", out, "--pad", "a,b")
@@ -227,8 +227,8 @@ def test_frames_without_a_face_are_named_in_a_warning(tmp_path, capsys, monkeypa
 
     d = tmp_path / "f"
     d.mkdir()
-    for i in range(8):
-        cv2.imwrite(str(d / f"f{i}.png"), np.full((64, 64, 3), 128, np.uint8))
+    for i in range(8):                                           # in colour: grey frames are refused
+        cv2.imwrite(str(d / f"f{i}.png"), np.full((64, 64, 3), (110, 128, 150), np.uint8))
     monkeypatch.setattr(mouthbox, "track_mouth", lambda frames, source="": [
         MouthBox(10, 20, 40, 20, found=i not in (2, 3, 4, 7)) for i, _ in enumerate(frames)])
     code, out, err = _run(capsys, "analyze", d, "-o", tmp_path / "p.csv")

@@ -67,6 +67,10 @@ def test_render_and_export_match_the_rest_face(tmp_path):
     (None, ["--size", "100"], "multiples of 16"),
     (None, ["--resolution", "5"], "resolution"),
     (None, ["--mesh", "{d}/m.obj", "--resolution", "2000"], "--resolution applies"),
+    (None, ["--face", "ict", "--skin", "II"], "--skin colours the embedded face, not ict"),
+    (None, ["--face", "ict", "--mesh", "{d}/m.obj"], "not both"),
+    (None, ["--identity", "3"], "--identity needs --face ict"),
+    (None, ["--face", "procedural", "--identity", "3"], "--identity draws a speaker of the ICT head"),
 ])
 def test_errors_exit_2_with_one_line(tmp_path, capsys, make, args, message):
     d = str(tmp_path)
@@ -96,3 +100,13 @@ def test_unknown_view_is_a_usage_error(capsys):
     assert main(["face", "-o", "x.png", "--view", "side"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "face: argument --view: invalid choice: 'side'" in err
+
+
+def test_the_built_in_ict_head_and_its_speakers_render_as_on_every_command(tmp_path):
+    a, b, c = (tmp_path / f"{n}.png" for n in "abc")
+    for out, more in ((a, []), (b, ["--identity", "7"]), (c, ["--identity", "7"])):
+        assert main(["face", "--face", "ict", "-o", str(out), "--size", "64", "-q", *more]) == 0
+    ia, ib, ic = (cv2.imread(str(p)).astype(int) for p in (a, b, c))
+    assert np.array_equal(ib, ic) and np.abs(ia - ib).max() > 30     # a speaker of its own, deterministic
+    assert main(["face", "--face", "procedural", "--skin", "V", "-o", str(tmp_path / "d.png"), "--size", "64",
+                 "-q"]) == 0

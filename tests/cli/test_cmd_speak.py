@@ -406,16 +406,16 @@ def test_speak_physics_frames_come_from_the_fem_face(short, capsys, coarse_rig):
 
 
 @pytest.mark.parametrize("extra, message", [
-    (["--physics", "sticky", "--moisture", "-1"], "--moisture must be >= 0"),
-    (["--physics", "sticky", "--evaporation", "-2"], "--evaporation must be >= 0"),
-    (["--physics", "sticky", "--glue", "-0.1"], "--glue must be >= 0"),
+    (["--physics", "sticky", "--moisture", "-1"], "argument --moisture: must be a number >= 0"),
+    (["--physics", "sticky", "--evaporation", "-2"], "argument --evaporation: must be a number >= 0"),
+    (["--physics", "sticky", "--glue", "-0.1"], "argument --glue: must be a number in [0, 10]"),
     (["--glue", "0.1"], "--glue needs --physics sticky or elastic"),
     (["--physics", "sticky", "--glue-profile", "0.95..0.99=1"], "names no saliva element"),
-    (["--physics", "sticky", "--seam-elements", "-1"], "--seam-elements must be in 0..192"),
-    (["--physics", "sticky", "--seam-elements", "4800"], "--seam-elements must be in 0..192"),
+    (["--physics", "sticky", "--seam-elements", "-1"], "argument --seam-elements: must be an integer from 0 to 192"),
+    (["--physics", "sticky", "--seam-elements", "4800"], "argument --seam-elements: must be an integer from 0 to 192"),
     (["--seam-elements", "48"], "--seam-elements needs --physics sticky or elastic"),
-    (["--physics", "sticky", "--tissue-limit", "1"], "--tissue-limit must be a stretch > 1"),
-    (["--physics", "sticky", "--tissue-limit", "nan"], "--tissue-limit must be a stretch > 1"),
+    (["--physics", "sticky", "--tissue-limit", "1"], "argument --tissue-limit: must be a number > 1 (or inf)"),
+    (["--physics", "sticky", "--tissue-limit", "nan"], "argument --tissue-limit: must be a number > 1 (or inf)"),
     (["--tissue-limit", "2.5"], "--tissue-limit needs --physics sticky or elastic"),
     (["--physics", "elastic", "--glue", "0.3"], "--glue sets the glue between the lips, which --physics elastic"),
     (["--physics", "elastic", "--moisture", "50"], "--moisture sets the glue"),

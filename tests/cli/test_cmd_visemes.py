@@ -82,6 +82,9 @@ def test_sheet_renders_56_labelled_visemes(tmp_path, capsys):
     (["--emotion", "happiness=nan"], "must be finite"),
     (["--emotion", "happiness=lots"], "must be a number"),
     (["--size", "50"], "multiple of 16"),
+    (["--emotions", "--weight", "1.5"], "between 0 and 1"),
+    (["--emotions", "--weight", "nan"], "between 0 and 1"),
+    (["--weight", "0.5"], "give --emotions"),
 ])
 def test_sheet_bad_input_exits_2_with_one_line(tmp_path, capsys, args, message):
     out = tmp_path / "bad.png"
@@ -103,3 +106,16 @@ def test_sheet_keep_contact_closes_bilabials_under_a_jaw_dropping_emotion(tmp_pa
         img = np.asarray(Image.open(out).convert("RGB"))
         tiles[bool(flag)] = img[r * 62:r * 62 + 48, c * 48:(c + 1) * 48]
     assert _dark_fraction(tiles[False]) > _dark_fraction(tiles[True]) + 0.01
+
+
+def test_sheet_of_the_emotions_at_a_weight(tmp_path):
+    from PIL import Image
+
+    full, half = tmp_path / "full.png", tmp_path / "half.png"
+    assert main(["sheet", "--emotions", "-o", str(full), "--size", "64", "-q"]) == 0
+    assert main(["sheet", "--emotions", "--weight", "0.5", "-o", str(half), "--size", "64", "-q"]) == 0
+    a, b = (np.asarray(Image.open(p).convert("RGB"), float) for p in (full, half))
+    assert a.shape == b.shape
+    # the neutral tile (top left) is the same, the emotions' tiles are not
+    assert np.abs(a[:64, :64] - b[:64, :64]).max() == 0
+    assert np.abs(a[:64, 64:] - b[:64, 64:]).mean() > 0.5

@@ -180,3 +180,17 @@ def test_quiet_writes_its_output_and_prints_nothing(tmp_path, monkeypatch, capsy
                       (["analyze", "s.png", "-o", "s.csv"], "s.csv")):
         assert main([*argv, "-q"]) == 0, capsys.readouterr().err
         assert (tmp_path / out).is_file() and capsys.readouterr().out == "", argv
+
+
+@pytest.mark.parametrize("option", ["--arkit", "--livelink"])
+def test_an_output_refused_as_it_opens_leaves_no_temporary(tmp_path, monkeypatch, capsys, option):
+    """A rig that is not there is found when its output opens, after every output's temporary was made:
+    none of them is left behind (a run writes all of its outputs or none)."""
+    from visemeface.cli import main
+
+    (tmp_path / "t.txt").write_text("bob moves\n")
+    monkeypatch.chdir(tmp_path)
+    status = main(["speak", "t.txt", "--no-video", "-q", "--track", "a.csv", option, "c.csv",
+                   f"{option}-rig", "nothere.glb"])
+    assert status == 2 and "nothere.glb" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.txt"]

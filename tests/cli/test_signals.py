@@ -66,7 +66,7 @@ def test_simulate_with_every_output_finishes_every_time(tmp_path):
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
-def test_an_interrupt_ends_simulate_within_two_seconds_and_resume_completes(tmp_path, sig):
+def test_an_interrupt_ends_simulate_promptly_and_resume_completes(tmp_path, sig, prompt_s):
     proc = _start(tmp_path, "cut")
     _wait_for_a_frame(tmp_path, "cut", proc)
     t0 = time.monotonic()
@@ -76,7 +76,7 @@ def test_an_interrupt_ends_simulate_within_two_seconds_and_resume_completes(tmp_
     except subprocess.TimeoutExpired:
         proc.kill()
         raise AssertionError("did not end within 10 s of the signal")
-    assert time.monotonic() - t0 < 2.0, f"{time.monotonic() - t0:.1f} s to stop"
+    assert time.monotonic() - t0 < prompt_s, f"{time.monotonic() - t0:.1f} s to stop"
     assert proc.returncode == 130 and "interrupted" in err
     names = sorted(p.name for p in tmp_path.iterdir())
     assert names == ["cut.mp4.checkpoint", "cut_fr.partial"]        # no output under its final name, no temporary
@@ -129,9 +129,9 @@ def _files(folder):
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGKILL])
 @pytest.mark.parametrize("command", sorted(KINEMATIC))
-def test_speak_and_say_resume_byte_identical_after_any_interruption(tmp_path, command, sig):
+def test_speak_and_say_resume_byte_identical_after_any_interruption(tmp_path, command, sig, prompt_s):
     """Interrupted mid-render by Ctrl-C, SIGTERM or a kill, then --resume: the very bytes of an uninterrupted
-    run (video, PNGs, PC2, track), nothing else left in the folder, and Ctrl-C/SIGTERM end it in < 2 s."""
+    run (video, PNGs, PC2, track), nothing else left in the folder, and Ctrl-C/SIGTERM end it promptly."""
     ref, cut = tmp_path / "ref", tmp_path / "cut"
     ref.mkdir(), cut.mkdir()
     proc = _kinematic(ref, command, "t")
@@ -148,7 +148,7 @@ def test_speak_and_say_resume_byte_identical_after_any_interruption(tmp_path, co
     proc.send_signal(sig)
     _, err = proc.communicate(timeout=10)
     if sig != signal.SIGKILL:
-        assert time.monotonic() - t0 < 2.0 and proc.returncode == 130 and "interrupted" in err
+        assert time.monotonic() - t0 < prompt_s and proc.returncode == 130 and "interrupted" in err
         assert not any((cut / n).exists() for n in ("t.mp4", "t.pc2", "t.csv", "t_fr"))  # nothing half done
     proc = _kinematic(cut, command, "t", "--resume")
     assert proc.wait(timeout=240) == 0, proc.communicate()[1]
@@ -156,3 +156,27 @@ def test_speak_and_say_resume_byte_identical_after_any_interruption(tmp_path, co
     assert sorted(got) == sorted(want)              # no temporaries, partial folders or checkpoints left
     for name in want:
         assert got[name] == want[name], f"{name} differs from the uninterrupted run"
+
+
+def test_after_the_interrupted_line_nothing_more_is_printed(tmp_path):
+    """What runs at exit after an interrupt (a library's exit hook: Dask closing a cluster caught half made
+    printed a 30-line traceback) does not add to the one line."""
+    from visemeface.resources import transcripts_path
+
+    program = ("import atexit, sys\n"
+               "atexit.register(lambda: print('Exception ignored in atexit callback', file=sys.stderr))\n"
+               "from visemeface.cli import main\n"
+               "main()\n")
+    argv = [sys.executable, "-c", program, "speak", str(transcripts_path("bob_moves_five_boats_long.TextGrid")),
+            "--fps", "120", "--size", "64", "--msaa", "0", "-q", "--frames", "fr"]
+    proc = subprocess.Popen(argv, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    t0 = time.monotonic()
+    while not ((tmp_path / "fr.partial").is_dir() and len(list((tmp_path / "fr.partial").glob("*.png"))) >= 3):
+        assert proc.poll() is None, f"finished before it could be interrupted: {proc.communicate()}"
+        assert time.monotonic() - t0 < 120, "no frame rendered in time"
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=30)
+    lines = err.splitlines()          # the frames kept for --resume are said before it
+    assert proc.returncode == 130 and lines[-1] == "visemeface: interrupted", err
+    assert all(line.startswith("visemeface: ") for line in lines), err

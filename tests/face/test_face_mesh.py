@@ -7,8 +7,8 @@ import pytest
 import trimesh
 
 from visemeface.errors import InputError
-from visemeface.face.mesh import (FaceMesh, NormalAccumulator, load_face, sidecar_path, split_quads,
-                                  vertex_normals)
+from visemeface.face.mesh import FaceMesh, load_face, sidecar_path, split_quads
+from visemeface.face.normals import NormalAccumulator, vertex_normals
 from visemeface.face.procedural import default_face
 
 

@@ -424,3 +424,69 @@ def test_batch_manifest_rows_with_hostile_cells(tmp_path):
             assert all(isinstance(r, Job) or (isinstance(r, BadRow) and "\n" not in r.error) for r in out)
         check_reader("batch manifest (hostile cells)", read, b"", ".csv")
     run()
+
+
+HOSTILE_VALUES = st.one_of(
+    st.integers(-10**30, 10**30), st.sampled_from([1e308, -1e308, 99999999999999999999, -1, 2**63, 0.5]),
+    st.floats(), st.lists(st.integers(-10**25, 10**25), max_size=5), st.lists(st.floats(), max_size=4),
+    st.lists(st.lists(st.integers(-10**22, 10**22), max_size=5), max_size=3), JSON_VALUES)
+
+
+def test_landmark_files_with_hostile_values(small_face_files):
+    """Well-formed landmarks files whose entries (a landmark, a region, a quad, the vertex count) hold hostile
+    values: 20-digit indices (OverflowError before), coordinates at 1e308, NaN, nested lists, any JSON."""
+    import copy
+
+    from visemeface.face.mesh import load_face
+
+    marks_path = next(small_face_files.glob("*.json"))
+    base = json.loads(marks_path.read_text())
+
+    @settings(FUZZ, max_examples=150)
+    @given(st.sampled_from(["landmarks", "regions", "quads", "n_vertices"]), st.integers(0, 200), HOSTILE_VALUES)
+    def run(section, k, value):
+        data = copy.deepcopy(base)
+        if section in ("landmarks", "regions"):
+            names = sorted(data[section])
+            data[section][names[k % len(names)]] = value
+        elif section == "quads":
+            data["quads"][k % len(data["quads"])] = value
+        else:
+            data[section] = value
+        check_reader("landmarks (hostile values)", lambda p: load_face(small_face_files / "face.obj", p),
+                     json.dumps(data).encode(), ".json")
+    run()
+
+
+def test_every_number_option_refuses_hostile_text():
+    """Every option parsed by the number helper: any text is a value in its range or one InputError line
+    naming the option (never a traceback, never a 309-digit echo)."""
+    from visemeface.cli import build_parser
+    from visemeface.commands._options import check_number
+
+    options = []
+    for name, parser in build_parser()._subparsers._group_actions[0].choices.items():
+        for action in parser._actions:
+            t = action.type
+            if getattr(t, "__name__", None) in ("number", "integer"):
+                options.append((f"{name} {action.option_strings[-1]}", t))
+    assert len(options) >= 15, options
+    texts = st.one_of(st.text(max_size=12), st.floats().map(repr), st.integers(-10**400, 10**400).map(str),
+                      st.sampled_from(["1e308", "-1e308", "1e-308", "nan", "inf", "-inf", "0x10", "1_000", " 5 "]))
+
+    @settings(FUZZ, max_examples=120)
+    @given(st.sampled_from(options), texts)
+    def run(option, text):
+        name, t = option
+        kw = dict(integer=t.__name__ == "integer", infinite=t.infinite)
+        try:
+            value = check_number(text, name.split()[-1], t.low, t.high, **kw)
+        except InputError as exc:
+            msg = str(exc)
+            assert msg.startswith(name.split()[-1] + " must be ") and "\n" not in msg and len(msg) < 140, msg
+            record_fuzz("number options", "refused")
+            return
+        assert value == value and (t.low is None or value >= t.low) and (t.high is None or value <= t.high
+                                                                           or value == float("inf"))
+        record_fuzz("number options", "read")
+    run()

@@ -264,7 +264,8 @@ def test_centre_profile_is_the_mouths_central_twelfth_however_fine_the_film():
 
 @pytest.mark.parametrize("spec, message", [
     ("0.95..0.99=0.2", "names no saliva element"),
-    ("centre=-1", "glue must be >= 0"),
+    ("centre=-1", "glue must be from 0 to 10"),
+    ("centre=1e308", "glue must be from 0 to 10, got 1e308"),
     ("middle=0.2", "unknown place 'middle'"),
     ("centre:0.2", "cannot read"),
     ("centre=abc", "is not a number"),
@@ -288,7 +289,7 @@ def test_glue_file_layouts(tmp_path):
     with pytest.raises(InputError, match="element 7 names no saliva element"):
         sv.read_glue_file(p, np.zeros(3))
     p.write_text("s,glue\n0,0.1\n0.5,-2\n")
-    with pytest.raises(InputError, match=r"glue.csv:3: glue must be >= 0"):
+    with pytest.raises(InputError, match=r"glue.csv:3: glue must be from 0 to 10"):
         sv.read_glue_file(p, np.zeros(3))
 
 

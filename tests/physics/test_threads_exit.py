@@ -33,7 +33,8 @@ print("done", flush=True)
 
 
 @pytest.mark.slow
-def test_a_two_thread_run_exits_within_two_seconds_of_finishing_its_work():
+def test_a_two_thread_run_exits_promptly_after_finishing_its_work(prompt_s):
+    """TBB's pool held processes 22-140 s at exit; bounded relative to this machine's interpreter start."""
     proc = subprocess.Popen([sys.executable, "-c", SCRIPT], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True)
     lines = []
@@ -55,4 +56,4 @@ def test_a_two_thread_run_exits_within_two_seconds_of_finishing_its_work():
     assert proc.returncode == 0, proc.stderr.read()[-2000:]
     assert layer == pinned and layer in ("omp", "workqueue")     # not TBB
     assert int(threads) == 2
-    assert gap < 2.0, f"exit took {gap:.1f} s after the work was done"
+    assert gap < prompt_s, f"exit took {gap:.1f} s after the work was done"

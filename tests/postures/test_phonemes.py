@@ -8,7 +8,7 @@ from visemeface.postures import phonemes as ph
 
 
 def test_inventory_is_designs_56_symbols_in_order():
-    # DESIGN §5: 0 _ ; 1-6 iy..aa; 7-12 ay..oy; 13-18 uh..ix; 19-23 ir..ur; 24-30 w..lx;
+    # the DECtalk order: 0 _ ; 1-6 iy..aa; 7-12 ay..oy; 13-18 uh..ix; 19-23 ir..ur; 24-30 w..lx;
     # 31-36 m..en; 37-44 f..zh; 45-50 p..g; 51-55 dx tx q ch jh.
     expected = ("_ iy ih ey eh ae aa ay aw ah ao ow oy uh uw rr yu ax ix ir er ar or ur "
                 "w yx r l hx rx lx m n nx el dz en f v th dh s z sh zh p b t d k g dx tx q ch jh").split()

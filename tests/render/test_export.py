@@ -224,7 +224,7 @@ def test_mp4_error_leaves_no_file_and_refuses_overwrite(tmp_path):
 def test_vertex_normals_plane_and_sphere():
     import trimesh
 
-    from visemeface.face.mesh import vertex_normals
+    from visemeface.face.normals import vertex_normals
 
     v, _, tris = grid_mesh()
     np.testing.assert_allclose(vertex_normals(v, tris), np.tile([0, 0, 1.0], (len(v), 1)))
@@ -340,4 +340,18 @@ def test_glb_validation_errors(tmp_path):
     with pytest.raises(ValueError, match="weights"):
         export.write_morph_animation_glb(tmp_path / "a.glb", v, tris, np.zeros((1, len(v), 3)), ["a"],
                                          [0.0, 0.1], np.zeros((3, 1)))
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_video_stopped_before_its_first_frame_says_nothing_and_leaves_nothing(tmp_path):
+    """Ctrl-C as a run opened its video: imageio-ffmpeg logged "No frames have been written; the written video
+    is invalid." on stderr beside our one line (in a process of its own: pytest captures logging)."""
+    import subprocess
+    import sys
+
+    code = ("from visemeface.export.video import VideoWriter\ntry:\n"
+            "    with VideoWriter('v.mp4', (32, 32), fps=30):\n        raise KeyboardInterrupt\n"
+            "except KeyboardInterrupt:\n    print('stopped')\n")
+    out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, check=True)
+    assert out.stdout == "stopped\n" and out.stderr == "", out.stderr
     assert list(tmp_path.iterdir()) == []

@@ -33,7 +33,7 @@ def test_a_child_decode_passes_the_refusal_on(vowels_wav, monkeypatch):
 
 
 @pytest.mark.slow
-def test_ctrl_c_ends_lipsync_of_a_long_recording_within_two_seconds(tmp_path, vowels_wav):
+def test_ctrl_c_ends_lipsync_of_a_long_recording_promptly(tmp_path, vowels_wav, prompt_s):
     x, rate = sf.read(str(vowels_wav))
     sf.write(str(tmp_path / "long.wav"), np.tile(x, 160), rate)           # 224 s: a decode of several s
     proc = subprocess.Popen([sys.executable, "-m", "visemeface", "lipsync", "long.wav", "-o", "long.lab"],
@@ -46,13 +46,13 @@ def test_ctrl_c_ends_lipsync_of_a_long_recording_within_two_seconds(tmp_path, vo
         _, err = proc.communicate(timeout=30)
     finally:
         proc.kill()
-    assert time.monotonic() - t0 < 2.0, f"{time.monotonic() - t0:.1f} s after Ctrl-C"
+    assert time.monotonic() - t0 < prompt_s, f"{time.monotonic() - t0:.1f} s after Ctrl-C"
     assert proc.returncode == 130 and err == "visemeface: interrupted\n", err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["long.wav"]
 
 
 @pytest.mark.slow
-def test_the_decoding_child_dies_with_a_killed_lipsync(tmp_path, vowels_wav):
+def test_the_decoding_child_dies_with_a_killed_lipsync(tmp_path, vowels_wav, prompt_s):
     """SIGKILL of the command left a multiprocessing child decoding on, which then printed a BrokenPipeError
     traceback and a leaked-semaphore warning on the terminal."""
     import os
@@ -73,8 +73,8 @@ def test_the_decoding_child_dies_with_a_killed_lipsync(tmp_path, vowels_wav):
         os.kill(proc.pid, signal.SIGKILL)
         t0 = time.monotonic()
         _, err = proc.communicate(timeout=60)  # returns when every holder of the command's stderr is gone
-        assert time.monotonic() - t0 < 2.0 and err == "", err
-        gone, alive = psutil.wait_procs(children, timeout=1.0)
+        assert time.monotonic() - t0 < prompt_s and err == "", err
+        gone, alive = psutil.wait_procs(children, timeout=prompt_s)
         alive = [p for p in alive if p.status() != psutil.STATUS_ZOMBIE]
         assert not alive, f"still running: {alive}"
     finally:

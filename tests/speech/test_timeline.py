@@ -233,6 +233,8 @@ def test_bad_inputs():
     seg = segs(["aa"], 0.1)
     with pytest.raises(InputError, match="unknown emotion 'happyness'.*happiness"):
         activation_track(seg, toy_visemes(), emotions={"happyness": 0.5}, expressions=expressions())
+    with pytest.raises(InputError, match="unknown emotion 'joy'; known: happiness, anger, surprise$"):   # nothing close: all
+        activation_track(seg, toy_visemes(), emotions={"joy": 0.5}, expressions=expressions())
     with pytest.raises(InputError, match="must be finite and >= 0"):
         activation_track(seg, toy_visemes(), emotions={"anger": -1}, expressions=expressions())
     with pytest.raises(InputError, match="must be finite"):

@@ -1,9 +1,11 @@
-"""Mouth-opening evaluation (seed 001 §4): how a mouth opens, frame by frame.
+"""Mouth-opening evaluation (Leach & Maddock 2019, §4): how a mouth opens, frame by frame.
 
-- :mod:`~visemeface.analysis.openings`: per-frame detection and seed 001's
+- :mod:`~visemeface.analysis.openings`: per-frame detection and Leach & Maddock's (2019)
   metrics -- the number of openings and each opening's area, width and
-  height, normalised by the natural mouth width; method ``"lips"`` (default,
-  :mod:`~visemeface.analysis.lips`: the region enclosed between the lips,
+  height, normalised by the natural mouth width; method ``"mesh"`` (default,
+  :mod:`~visemeface.analysis.innerlip`: inside the face mesh's inner-lip
+  contour, what is unlike the speaker's own lips), ``"lips"``
+  (:mod:`~visemeface.analysis.lips`: the region enclosed between the lips,
   segmented by colour, teeth and tongue included) or ``"seed"`` (Rec.601
   grey, median blur, dark threshold, top-level contours, optional convex hull
   and teeth handling).
@@ -20,6 +22,9 @@
   "fps": ..., "size": [w, h]}``.
 - :mod:`~visemeface.analysis.synthetic`: synthetic mouths with known
   openings (ground truth for tests and benchmarks).
+- :mod:`~visemeface.analysis.augment`: altered copies of real clips (darker
+  skin, a moustache, grey, low contrast, mirrored) to test the measure across
+  appearances (``scripts/analysis_fairness.py``).
 
 Example
 -------

@@ -1,7 +1,7 @@
 """Mouth opening as the region enclosed between the lips (the default method of ``analyze``).
 
 Real mouths are rarely a dark hole: teeth and tongue fill most open frames, and
-a grey threshold (the seed's method, :mod:`~visemeface.analysis.openings`)
+a grey threshold (Leach & Maddock's (2018) method, :mod:`~visemeface.analysis.openings`)
 finds only dark specks there. Lips, however, are redder than the skin around
 them and than teeth or the cavity, so this method segments the **lips** by
 colour and calls *opening* whatever lies between the upper and the lower lip:

@@ -48,7 +48,7 @@ skin colour, the lips in it by redness:
    reaches from ``0.15 w`` above the red region (the paler upper vermilion) to
    its bottom; :class:`~visemeface.analysis.openings.OpeningDetector` pads it.
    On MPEG-1 (4:2:0 chroma) the lip colour fades 3-6 px before a corner, so
-   this box can end inside the mouth (``docs/analysis.md``).
+   this box can end inside the mouth (``docs/notes/analysis.md``).
 
 A frame where no lips are found takes the neighbouring frames' box; a clip
 where no frame shows a face is an :class:`~visemeface.errors.InputError`.
@@ -67,11 +67,11 @@ from visemeface.errors import InputError
 
 #: Landmark box: margin beyond the outer lip outline, left and right, in natural mouth widths. Chosen
 #: on the three GRID clips of ../shared/realdata: the mesh corners lie up to 3.3 px (0.08 w) inside
-#: the hand-read corners (docs/analysis.md).
+#: the hand-read corners (docs/notes/analysis.md).
 CORNER_MARGIN = 0.1
 
 #: Landmark box: the face mesh runs on every this-th frame, the frames between interpolated (speed:
-#: benchmarks/analyze.py, docs/analysis.md).
+#: benchmarks/analyze.py, docs/notes/analysis.md).
 LANDMARK_EVERY = 2
 
 #: Landmark box: lips count as closed (rest) when the inner-lip gap is at most this x the corner distance.
@@ -82,6 +82,13 @@ CLOSED_GAP = 0.05
 #: mouth corners) is an InputError rather than silently swapped metrics. Chosen, not tuned: at 30
 #: degrees a width reads cos 30 = 0.87 of itself; the GRID clips of ../shared/realdata roll 1-4 degrees.
 MAX_ROLL_DEG = 30.0
+
+#: Landmark box: a face is upside down when the face detector scores the frame turned 180 degrees higher than
+#: the frame itself by more than this. The face mesh then fits an upright face to it (its mouth on the eyes)
+#: and the corner line reads level, so the roll check alone passed it. Chosen from one measurement, not
+#: tuned: the best detection scores 0.88-0.97 upright against 0.57-0.69 turned on the three GRID clips of
+#: ../shared/realdata and a grey-scale copy of one, and 0.63-0.64 against 0.88-0.89 on swwp2s turned over.
+UPSIDE_DOWN_MARGIN = 0.1
 
 #: Box width / width of the segmented lips. Tuned on the three GRID clips of ../shared/realdata:
 #: the lips' colour fades out 1-3 px before the hand-read corners of a 35-40 px mouth.
@@ -264,6 +271,20 @@ def _check_upright(corners: np.ndarray, source: str) -> None:
                          f"(e.g. ffmpeg -vf transpose=1 or 2)")
 
 
+def _check_not_upside_down(frame: np.ndarray, models, source: str) -> None:
+    """InputError when ``frame``'s face is upside down (:data:`UPSIDE_DOWN_MARGIN`)."""
+    def best(img):
+        faces = models.detect(np.ascontiguousarray(img))
+        return faces[0].score if faces else 0.0
+
+    own, turned = best(frame), best(frame[::-1, ::-1])
+    if turned > own + UPSIDE_DOWN_MARGIN:
+        where = f"{source}: " if source else ""
+        raise InputError(f"{where}the face is upside down (the face detector scores the frame turned over "
+                         f"{turned:.2f}, as it is {own:.2f}); the analysis needs an upright face: rotate the "
+                         "video first (e.g. ffmpeg -vf transpose=1,transpose=1)")
+
+
 def landmark_boxes(frames: Iterable[np.ndarray], source: str = "", tracker=None,
                    every: int | None = None) -> list[MouthBox]:
     """Per-frame boxes from face-mesh landmarks tracked on every ``every``-th frame (default
@@ -274,11 +295,13 @@ def landmark_boxes(frames: Iterable[np.ndarray], source: str = "", tracker=None,
     tracker = tracker or FaceTracker()
     every = max(1, int(every or LANDMARK_EVERY))
     cfg = settings()["mouth"]
-    keep = np.array(cfg["outer"] + cfg["corners"] + [cfg["upper_inner"], cfg["lower_inner"]])
+    keep = np.array(cfg["outer"] + cfg["corners"] + [cfg["upper_inner"], cfg["lower_inner"]] + cfg["inner"])
     found, size, last = [], None, None
     for i, frame in enumerate(frames):
         size = frame.shape[1], frame.shape[0]
         pts = tracker(frame) if i % every == 0 else None
+        if pts is not None and not any(f is not None for f in found) and hasattr(tracker, "models"):
+            _check_not_upside_down(frame, tracker.models, source)       # once, on the first face found
         found.append(None if pts is None else pts[keep])
         last = frame
     if found and found[-1] is None and (len(found) - 1) % every:
@@ -289,7 +312,8 @@ def landmark_boxes(frames: Iterable[np.ndarray], source: str = "", tracker=None,
         raise _no_face(len(found), source)
     pts = _fill_gaps(np.array([f if f is not None else np.full((len(keep), 2), np.nan) for f in found]), ok)
     n_out = len(cfg["outer"])
-    outer, corners, inner = pts[:, :n_out], pts[:, n_out:n_out + 2], pts[:, n_out + 2:]
+    outer, corners, inner = pts[:, :n_out], pts[:, n_out:n_out + 2], pts[:, n_out + 2:n_out + 4]
+    contours = np.concatenate([outer, pts[:, n_out + 4:]], axis=1)          # (n, 40, 2): outer, inner
     _check_upright(corners, source)
     w0 = natural_width(corners, np.linalg.norm(inner[:, 1] - inner[:, 0], axis=1))
     lo = np.minimum(outer.min(axis=1), corners.min(axis=1))
@@ -305,8 +329,8 @@ def landmark_boxes(frames: Iterable[np.ndarray], source: str = "", tracker=None,
     # a frame has no face when the tried frames on both sides of it (those that exist) had none
     idx = np.flatnonzero(tried)
     lost = np.interp(np.arange(len(found)), idx, (~ok[idx]).astype(float)) == 1.0
-    return [MouthBox(int(a), int(b), int(c - a + 1), int(d - b + 1), nat, not bool(g))
-            for a, b, c, d, g in zip(x0, y0, x1, y1, lost)]
+    return [MouthBox(int(a), int(b), int(c - a + 1), int(d - b + 1), nat, not bool(g), lips)
+            for a, b, c, d, g, lips in zip(x0, y0, x1, y1, lost, contours)]
 
 
 def colour_boxes(frames: Iterable[np.ndarray], smooth: int = 5, min_face: float = 0.02,

@@ -1,4 +1,4 @@
-"""Per-frame mouth-opening detection (seed 001 §4).
+"""Per-frame mouth-opening detection (Leach & Maddock 2019, §4).
 
 The *mouth box* ``(x, y, w, h)`` is in pixel coordinates, origin top-left,
 x to the right, y down; its left and right edges lie on the mouth corners at
@@ -6,13 +6,13 @@ rest, so ``w`` is the natural mouth width that normalises every metric. The
 frame is cropped to the box grown by ``pad`` (fractions of ``w``: left, top,
 right, bottom; default ``0.1, 0.1, 0.1, 0.4``, clipped to the frame) because
 a box drawn on the rest lips -- as the renderer writes it -- would cut off a
-jaw-opened mouth; ``pad=0`` analyses exactly the box, as seed 001 does.
+jaw-opened mouth; ``pad=0`` analyses exactly the box, as Leach & Maddock (2019) do.
 Inside that region:
 
 1. Rec.601 luma, :math:`Y = 0.299 r + 0.587 g + 0.114 b`.
 2. Median blur with an odd kernel scaled to the mouth width (applied to the
    thresholded image by threshold decomposition, see :func:`median_mask`),
-   :math:`k = \\max(3, \\mathrm{odd}(\\mathrm{round}(11 w / 800)))` (seed 001:
+   :math:`k = \\max(3, \\mathrm{odd}(\\mathrm{round}(11 w / 800)))` (Leach & Maddock 2019:
    11 px for an 800 px mouth), which removes noise and small highlights.
 3. Binary threshold: the opening is *dark*, ``Y <= t``. ``t`` is fixed or found
    by Otsu's method (see :func:`otsu_threshold`).
@@ -22,9 +22,9 @@ Inside that region:
    highlight inside an opening is a hole, not a split. Optionally each
    contour is replaced by its convex hull. Openings smaller than
    ``min_area * w**2`` are dropped.
-6. Metrics per opening (seed 001's four): the count; the area (pixels inside
+6. Metrics per opening (Leach & Maddock's (2019) four): the count; the area (pixels inside
    or on the filled contour); the width :math:`\\max x - \\min x + 1` and
-   height :math:`\\max y - \\min y + 1` of those pixels (seed 001's extents,
+   height :math:`\\max y - \\min y + 1` of those pixels (Leach & Maddock's (2019) extents,
    counted in covered pixel columns/rows so that a one-pixel slit is 1 px
    wide and a digitised ellipse of semi-axes ``a, b`` measures ``2a x 2b``). Widths and heights are divided by
    ``w``, areas by ``w**2``, so every value is dimensionless and independent
@@ -55,8 +55,13 @@ from visemeface.errors import InputError
 #: Rec.601 luma weights for (r, g, b).
 REC601 = (0.299, 0.587, 0.114)
 
-#: Opening detection methods: the region between the lips (default) and seed 001's grey threshold.
-METHODS = ("lips", "seed")
+#: Largest coordinate or side of a mouth box in pixels (frames are far smaller; 1e308 was echoed in 309 digits).
+MAX_BOX_PX = 100_000
+
+#: Opening detection methods: inside the face mesh's inner-lip contour by evidence relative to the lips
+#: (default, :mod:`~visemeface.analysis.innerlip`), the region between the lips segmented by colour, and
+#: Leach & Maddock's (2019) grey threshold.
+METHODS = ("mesh", "lips", "seed")
 
 
 @dataclass(frozen=True)
@@ -68,7 +73,11 @@ class MouthBox:
     automatic per-frame box follows the corners of a spread or rounded mouth
     while the scale stays the rest width (:mod:`~visemeface.analysis.mouthbox`).
     ``found`` is False for an automatic box taken from neighbouring frames
-    because no face was found in and around this one.
+    because no face was found in and around this one. ``lips`` (None: not
+    known) holds the face mesh's lip outlines in frame pixels, ``(40, 2)``:
+    the outer contour's 20 points then the inner contour's 20
+    (``data/models/face.toml`` ``mouth.outer`` and ``mouth.inner``), which
+    bound where the default method looks for an opening.
     """
 
     x: int
@@ -77,6 +86,7 @@ class MouthBox:
     h: int
     natural_w: int = 0
     found: bool = True
+    lips: np.ndarray | None = field(default=None, compare=False, repr=False)
 
     @property
     def mouth_width(self) -> int:
@@ -92,8 +102,9 @@ class MouthBox:
             vals = [float(v) for v in box]
         except (TypeError, ValueError):
             raise InputError(f"mouth box must be 4 numbers x,y,w,h, got {box!r}") from None
-        if len(vals) != 4 or not all(np.isfinite(vals)):
-            raise InputError(f"mouth box must be 4 finite numbers x,y,w,h, got {box!r}")
+        if len(vals) != 4 or not all(np.isfinite(vals)) or max(map(abs, vals)) > MAX_BOX_PX:
+            shown = ",".join(f"{v:g}" for v in vals)
+            raise InputError(f"mouth box must be 4 finite numbers x,y,w,h of at most {MAX_BOX_PX} px, got {shown}")
         x, y, w, h = (int(round(v)) for v in vals)
         if w < 4 or h < 4:
             raise InputError(f"mouth box {x},{y},{w},{h} is too small (w and h must be >= 4 px)")
@@ -262,14 +273,14 @@ def teeth_mask(rgb: np.ndarray, saturation_max: int = 60, value_min: int = 150) 
 
 @dataclass(frozen=True)
 class OpeningDetector:
-    """Settings of the seed-001 opening detector; call :meth:`detect` per frame.
+    """Settings of the Leach & Maddock (2019) opening detector; call :meth:`detect` per frame.
 
     Parameters
     ----------
     threshold : "otsu" or float
         Grey level (0..255) at or below which a pixel is opening, or Otsu's method.
     hull : bool
-        Replace each opening's contour by its convex hull (seed 001 Fig. 9).
+        Replace each opening's contour by its convex hull (Leach & Maddock 2019, Fig. 9).
     teeth : bool
         Count bright, unsaturated pixels touching a dark region as opening (Fig. 10).
     min_area : float
@@ -283,17 +294,22 @@ class OpeningDetector:
         HSV limits of :func:`teeth_mask`.
     pad : float or (left, top, right, bottom)
         Margins around the box that are analysed too, in units of ``w``.
-    method : "lips" or "seed"
-        ``"lips"`` (default): the opening is the region enclosed between the
-        lips, teeth and tongue included (:mod:`~visemeface.analysis.lips`);
+    method : "mesh", "lips" or "seed"
+        ``"mesh"`` (default): inside the face mesh's inner-lip contour
+        (``MouthBox.lips``; without it, between the lips segmented by colour),
+        the pixels unlike the speaker's own lips -- dark cavity, bright or grey
+        teeth -- and what lies between them (:mod:`~visemeface.analysis.innerlip`);
+        ``threshold`` and ``teeth`` are moot.
+        ``"lips"``: the opening is the region enclosed between the
+        lips segmented by colour, teeth and tongue included (:mod:`~visemeface.analysis.lips`);
         ``threshold`` then only sets the dark-cavity level (a number) or keeps
         it relative to the lips (``"otsu"``), and ``teeth`` is moot (teeth
-        between the lips always count). ``"seed"``: seed 001's grey threshold.
+        between the lips always count). ``"seed"``: Leach & Maddock's (2019) grey threshold.
     min_height : float
-        ``"lips"`` only: an opening thinner than this (fraction of ``w``) is the
+        ``"mesh"`` and ``"lips"``: an opening thinner than this (fraction of ``w``) is the
         seam of closed lips, one narrower a speck.
     min_chroma : float
-        ``"lips"`` only: lips must be at least this much redder (Lab a*, 8-bit
+        ``"lips"`` (and ``"mesh"`` without a face mesh): lips must be at least this much redder (Lab a*, 8-bit
         levels) than the skin, or there is no mouth to measure.
     """
 
@@ -306,7 +322,7 @@ class OpeningDetector:
     teeth_saturation: int = 60
     teeth_value: int = 150
     pad: tuple = (0.1, 0.1, 0.1, 0.4)
-    method: str = "lips"
+    method: str = "mesh"
     min_height: float = 0.05
     min_chroma: float = 6.0
 
@@ -377,6 +393,13 @@ class OpeningDetector:
         if self.method == "seed":
             mask, t = self.opening_mask(crop, w)
             scale = 1.0
+        elif self.method == "mesh":
+            from visemeface.analysis.innerlip import mesh_opening_mask
+
+            lips = None if box.lips is None else np.asarray(box.lips, float) - (x0, y0)
+            mask, t, scale = mesh_opening_mask(np.ascontiguousarray(crop, dtype=np.uint8),
+                                               (box.x - x0, box.y - y0, box.w, box.h), lips, w,
+                                               self.min_height, self.min_chroma)
         else:
             dark = None if self.threshold == "otsu" else float(self.threshold)
             mask, t, scale = lips_opening_mask(np.ascontiguousarray(crop, dtype=np.uint8),
@@ -427,7 +450,7 @@ def detect_openings(frame: np.ndarray, box, **settings) -> Openings:
 
 
 def draw_openings(frame: np.ndarray, openings: Openings, box, label: str | None = None) -> np.ndarray:
-    """Copy of an RGB ``frame`` with the mouth box (blue) and opening outlines drawn (seed 001 Figs. 7-15).
+    """Copy of an RGB ``frame`` with the mouth box (blue) and opening outlines drawn (Leach & Maddock 2019, Figs. 7-15).
 
     The largest opening is outlined in green, the others in yellow; the count
     (and ``label``) is written above the box.

@@ -1,4 +1,4 @@
-"""Mouth-opening profiles over time, their distance and plots (seed 001 §4-5).
+"""Mouth-opening profiles over time, their distance and plots (Leach & Maddock 2019, §4-5).
 
 A *profile* is a pandas DataFrame, one row per frame, with columns
 
@@ -13,7 +13,7 @@ A *profile* is a pandas DataFrame, one row per frame, with columns
 
 where ``w`` is the natural mouth width in pixels (the mouth box's width).
 ``df.attrs`` holds ``fps``, ``mouth_width`` (px) and ``source``. The
-derivatives are per-frame differences, as in seed 001: a jump of the width
+derivatives are per-frame differences, as in Leach & Maddock (2019): a jump of the width
 when two openings merge shows up as one spike (Figs. 25-26).
 
 Profiles are saved as CSV (:func:`write_profile`, :func:`read_profile`).
@@ -127,8 +127,15 @@ def analyze_source(source, box=None, detector: OpeningDetector | None = None,
 
         source = open_frames(source)
 
+    detector = detector or OpeningDetector()
+    from visemeface.analysis import landmarks
+
+    by_colour = detector.method == "lips" or (box is None and not landmarks.available())
+
     def frames(desc):
-        return progress(source.frames(), total=source.n_frames, desc=desc, show=show_progress)
+        it = source.frames()
+        return progress(_in_colour(it, source.path, detector.method) if by_colour else it,
+                        total=source.n_frames, desc=desc, show=show_progress)
 
     if box is not None:
         return analyze_frames(frames("analyze"), box, source.fps, detector, on_frame, str(source.path)), None
@@ -144,6 +151,26 @@ def analyze_source(source, box=None, detector: OpeningDetector | None = None,
         boxes = track_mouth(frames("find mouth"), source=str(source.path))
         todo = frames("analyze")
     return analyze_frames(todo, boxes, source.fps, detector, on_frame, str(source.path)), boxes
+
+
+#: Most a grey-scale frame's channels differ (0-255): a clip whose first frame's channels all lie within this
+#: of each other has no colour (compression leaves a level or two).
+GREY_CHANNEL_SPREAD = 3
+
+
+def _in_colour(frames, path, method: str):
+    """``frames``, refused with an InputError when the first has no colour (the lips, and the automatic box
+    without landmarks, are found by colour; grey frames gave "openings max 0" for a talking face)."""
+    for i, frame in enumerate(frames):
+        if i == 0:
+            f = frame.astype(np.int16)
+            spread = max(int(np.abs(f[..., 0] - f[..., 1]).max()), int(np.abs(f[..., 1] - f[..., 2]).max()))
+            if spread <= GREY_CHANNEL_SPREAD:
+                how = ("the lips method finds the lips by colour: try --method seed" if method == "lips" else
+                       "the automatic mouth box without face landmarks finds the face by colour: give --box "
+                       "or pip install 'visemeface[track]'")
+                raise InputError(f"the frames are grey-scale (no colour); {how}", path)
+        yield frame
 
 
 class _Repeat:
@@ -232,7 +259,7 @@ def l2_distance(a: pd.DataFrame, b: pd.DataFrame, columns: Iterable[str] = METRI
     Each profile is linearly interpolated in time onto those :math:`t_k`, so
     videos with different frame rates are compared at common instants; with
     equal rates and start times this is the plain L2 norm of the difference
-    of the columns, as in seed 001 §5.
+    of the columns, as in Leach & Maddock (2019) §5.
 
     Returns
     -------
@@ -291,6 +318,14 @@ def lagged(a: pd.DataFrame, b: pd.DataFrame, column: str, lag: int) -> tuple[np.
     return va, vb
 
 
+def within(df: pd.DataFrame, t0: float, t1: float) -> pd.DataFrame:
+    """The frames of a profile at times ``t0 <= time <= t1`` (its ``attrs`` kept): the span a comparison is
+    made over, e.g. a clip's speech span (:func:`visemeface.speech.audio.speech_span`)."""
+    cut = df[(df["time"] >= t0) & (df["time"] <= t1)].reset_index(drop=True)
+    cut.attrs.update(df.attrs)
+    return cut
+
+
 def correlation(a: pd.DataFrame, b: pd.DataFrame, columns: Iterable[str] = METRICS, column: str = "height",
                 max_lag: int = 5) -> dict:
     """Pearson correlation of two profiles and the time offset that maximises it.
@@ -329,7 +364,7 @@ def rise_exponent(height) -> float:
     ``height`` holds the opening's heights on the frames since the last closed one, so that the
     first is :math:`t = 1`. The fit (least squares of :math:`\\log h` over :math:`\\log t`) runs up
     to the first frame at :data:`RISE_TOP` of the highest, over the frames with :math:`h > 0`.
-    Seed 001, Fig. 19: :math:`p < 1` opens fast and tapers, :math:`p > 1` opens slowly, then faster.
+    Leach & Maddock (2019), Fig. 19: :math:`p < 1` opens fast and tapers, :math:`p > 1` opens slowly, then faster.
     NaN with fewer than 3 such frames, or with a NaN height anywhere in ``height``.
     """
     h = np.asarray(height, dtype=float)
@@ -376,7 +411,7 @@ def shifted_profile(df: pd.DataFrame, seconds: float) -> pd.DataFrame:
 def plot_profiles(profiles: Mapping[str, pd.DataFrame], path: str | Path,
                   metrics: Iterable[str] = ("count", "area", "width", "height", "d_area", "d_width"),
                   title: str | None = None, force: bool = False) -> None:
-    """Plot profiles over time, several videos overlaid (seed 001 Figs. 16-26), as PNG.
+    """Plot profiles over time, several videos overlaid (Leach & Maddock 2019, Figs. 16-26), as PNG.
 
     One panel per metric, stacked with a shared time axis; one line per
     profile, labelled with its key in ``profiles``.

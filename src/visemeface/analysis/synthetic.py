@@ -108,7 +108,7 @@ def merging_mouth_frames(n_frames: int = 40, merge_frame: int = 20, size=(256, 2
     wide -- stuck saliva -- on frames ``< merge_frame``; from ``merge_frame``
     on, the bridge is gone. So the count drops 2 -> 1 and the largest opening's
     width jumps from about ``0.27 w`` to ``0.6 w`` exactly at ``merge_frame``
-    (seed 001 Figs. 22 and 26).
+    (Leach & Maddock 2019, Figs. 22 and 26).
 
     Parameters
     ----------

@@ -28,6 +28,10 @@ from visemeface.analysis.openings import MouthBox
 from visemeface.errors import InputError
 from visemeface.outputs import atomic_output
 
+#: Frames a video may fall short of the count its header's duration gives before analyze warns that it is
+#: truncated: the duration is rounded to a frame, and some encoders count one frame more or less.
+MISSING_FRAMES_TOLERATED = 2
+
 VIDEO_SUFFIXES = {".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v"}
 IMAGE_SUFFIXES = {".png", ".jpg", ".jpeg"}
 
@@ -54,6 +58,7 @@ class FrameSource:
     # The decoder opened by open_frames (meta already read), used by the first
     # frames() call: starting and stopping ffmpeg twice costs seconds.
     _reader: Iterator | None = field(default=None, repr=False, compare=False)
+    _warned: bool = field(default=False, repr=False, compare=False)
 
     def close(self) -> None:
         """Stop a decoder that was opened but not read."""
@@ -78,8 +83,17 @@ class FrameSource:
             if gen is None:
                 gen = imageio_ffmpeg.read_frames(str(self.path), pix_fmt="rgb24")
                 next(gen)
+            count = 0
             for buf in gen:
+                count += 1
                 yield np.frombuffer(buf, np.uint8).reshape(h, w, 3)
+            if self.n_frames and count < self.n_frames - MISSING_FRAMES_TOLERATED and not self._warned:
+                import warnings
+
+                self._warned = True
+                warnings.warn(f"{self.path}: read {count} of the {self.n_frames} frames its header gives "
+                              f"({self.n_frames / self.fps:.2f} s): the video is truncated or damaged, and only "
+                              f"its first {count / self.fps:.2f} s are measured")
         except (OSError, RuntimeError) as exc:
             raise InputError(f"cannot decode video: {_first_line(exc)}", self.path) from None
         finally:
@@ -98,7 +112,14 @@ def _first_line(exc: BaseException) -> str:
 
 def _read_image(path: Path) -> np.ndarray:
     data = np.fromfile(path, np.uint8)
-    img = cv2.imdecode(data, cv2.IMREAD_COLOR) if data.size else None
+    from cv2.utils import logging as cv_log
+
+    level = cv_log.getLogLevel()
+    cv_log.setLogLevel(cv_log.LOG_LEVEL_SILENT)   # a corrupt PNG printed OpenCV's [ WARN] and libpng's [ERROR]
+    try:
+        img = cv2.imdecode(data, cv2.IMREAD_COLOR) if data.size else None
+    finally:
+        cv_log.setLogLevel(level)
     if img is None:
         raise InputError("cannot read image", path)
     return cv2.cvtColor(img, cv2.COLOR_BGR2RGB)

@@ -53,13 +53,11 @@ def clip_state(job: Job, outdir) -> str:
 
 
 @functools.lru_cache(maxsize=2)
-def _rig(face: str | None, landmarks: str | None, rig: str | None):
-    """The rig of the batch's face and rig files, built once per worker process."""
-    from types import SimpleNamespace
+def _rig(face: str | None, landmarks: str | None, rig: str | None, identity: str | None = None):
+    """The rig of the batch's face and rig files (and a clip's ICT identity), built once per worker process."""
+    from visemeface.muscles.rig import rig_for
 
-    from visemeface.commands._options import build_rig
-
-    return build_rig(SimpleNamespace(face=face, landmarks=landmarks, rig=rig))
+    return rig_for(face, landmarks, rig, identity)
 
 
 def _utterance(job: Job):
@@ -94,7 +92,7 @@ def _make(job: Job, folder: Path, force: bool) -> int:
         check_audio(job.audio)
     render = RenderSettings(size=job.size, view=job.view, msaa=job.msaa).check()
     utterance = _utterance(job)
-    rig = _rig(job.face, job.landmarks, job.rig)
+    rig = _rig(job.face, job.landmarks, job.rig, job.identity)
     staged = Staged(folder, force=force, folder=True, ours=_our_clip)
     tmp = staged.open()
     try:

@@ -10,6 +10,8 @@ Columns (a header row names them; any order; only ``clip`` and one of
     emotion     NAME[=W] weights, separated by ; or spaces, e.g. "happiness=0.6; surprise=0.2"
     physics     none, sticky or elastic
     fps, size, view, msaa, interp, rate
+    identity    with the batch's --face ict: a speaker of ICT's identity space (an integer seed, or weights
+                of its first modes separated by , as --identity takes), so a corpus has many speakers
     outputs     sink names (`visemeface.export.SINKS`: video, frames, obj, pc2, gltf, track, ...),
                 separated by ; or spaces
 
@@ -31,7 +33,7 @@ from visemeface.errors import InputError, choose, close_matches
 
 #: The columns a manifest may have.
 COLUMNS = ("clip", "transcript", "text", "audio", "emotion", "physics", "fps", "size", "view", "msaa",
-           "interp", "rate", "outputs")
+           "interp", "rate", "outputs", "identity")
 #: A clip id: a file name that is not hidden, has no separators and is at most this long.
 CLIP_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,99}$")
 #: Names in the output folder that are not clips.
@@ -59,6 +61,7 @@ class Job:
     interp: str = "coarticulation"
     rate: float | None = None
     outputs: tuple[str, ...] = ("video",)
+    identity: str | None = None
     face: str | None = None
     landmarks: str | None = None
     rig: str | None = None
@@ -170,6 +173,16 @@ def check_settings(s: dict, base: Path = Path(".")) -> dict:
     else:
         out["rate"] = None
     out["outputs"] = _outputs(s.get("outputs"))
+    identity = s.get("identity")
+    if identity not in (None, ""):
+        from visemeface.face.ict import identity_weights
+
+        if s.get("face") != "ict":
+            raise InputError("identity draws a speaker of the ICT head: the batch needs --face ict")
+        identity_weights(identity)
+        out["identity"] = str(identity).strip()
+    else:
+        out["identity"] = None
     from visemeface.export.sinks import check_physics_outputs
 
     check_physics_outputs(out["outputs"], out["physics"], option="")

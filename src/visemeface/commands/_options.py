@@ -14,31 +14,129 @@ import math
 from pathlib import Path
 
 
+# --------------------------------------------------------------------------- numbers
+
+class Help(argparse.HelpFormatter):
+    """Help text as written where the author laid it out (a text holding line breaks: an epilog of
+    examples), wrapped to the terminal where not (a description written as one paragraph)."""
+
+    def _fill_text(self, text, width, indent):
+        if "\n" in text:
+            return "".join(indent + line for line in text.splitlines(keepends=True))
+        return super()._fill_text(text, width, indent)
+
+
+def shown(text, most: int = 24) -> str:
+    """``text`` as a message quotes it: itself, or its start and its length when longer than ``most``."""
+    text = str(text).strip()
+    return text if len(text) <= most else f"{text[:12]}... ({len(text)} characters)"
+
+
+def check_number(value, name: str = "", low: float | None = None, high: float | None = None, *,
+                 integer: bool = False, low_open: bool = False, high_open: bool = False,
+                 infinite: bool = False, what: str = ""):
+    """``value`` (a number, or its text as typed) as a float, or an int with ``integer``, checked: a number,
+    finite (``infinite``: +inf allowed, as "no limit"), in ``low``..``high`` (``low_open``/``high_open``:
+    the end itself excluded). Anything else is one :class:`InputError` naming ``name`` (the option) with the
+    range and the value as given (shortened: a 309-digit number is not echoed whole); ``what`` adds the unit
+    or meaning, e.g. "frames". The one check of every number a user types (options, profile items, cells).
+    """
+    from visemeface.errors import InputError
+
+    kind = "an integer" if integer else "a number"
+    if low is not None and high is not None:
+        a, b = ("(" if low_open else "["), (")" if high_open else "]")
+        where = f"{kind} from {low:g} to {high:g}" if integer else f"{kind} in {a}{low:g}, {high:g}{b}"
+    elif low is not None:
+        where = f"{kind} {'>' if low_open else '>='} {low:g}"
+    elif high is not None:
+        where = f"{kind} {'<' if high_open else '<='} {high:g}"
+    else:
+        where = f"a finite {kind.split()[-1]}"
+    if infinite:
+        where += " (or inf)"
+    if what:
+        where += f" ({what})"
+    problem = InputError(f"{name + ' ' if name else ''}must be {where}, got {shown(value)}")
+    if isinstance(value, bool):
+        raise problem
+    try:
+        if integer:
+            number = int(str(value).strip()) if isinstance(value, str) else value
+            if not isinstance(number, int) and not (isinstance(number, float) and number.is_integer()):
+                raise problem
+            number = int(number)
+        else:
+            number = float(value)
+    except (TypeError, ValueError, OverflowError):
+        raise problem from None
+    if number != number or (abs(number) == math.inf and not (infinite and number > 0)):
+        raise problem
+    if low is not None and (number < low or (low_open and number == low)):
+        raise problem
+    if high is not None and number != math.inf and (number > high or (high_open and number == high)):
+        raise problem
+    return number
+
+
+def number(low: float | None = None, high: float | None = None, **kw):
+    """An argparse ``type=`` of :func:`check_number`: the option's value checked as it is parsed, so a bad
+    one is argparse's one line "argument --fps: must be a number in (0, 10000], got '1e308'"."""
+    def parse(text: str):
+        from visemeface.errors import InputError
+
+        try:
+            return check_number(text, "", low, high, **kw)
+        except InputError as e:
+            raise argparse.ArgumentTypeError(e.reason) from None
+
+    parse.__name__ = "integer" if kw.get("integer") else "number"
+    parse.low, parse.high, parse.infinite = low, high, kw.get("infinite", False)      # read by the tests' fuzz
+    return parse
+
+
 # --------------------------------------------------------------------------- face and rig
 
-def add_face_arguments(p: argparse.ArgumentParser) -> None:
-    """``--face MESH``, ``--landmarks JSON``, ``--rig TOML``."""
+def add_face_arguments(p: argparse.ArgumentParser, skin: bool = True) -> None:
+    """``--face MESH``, ``--landmarks JSON``, ``--rig TOML`` (and ``--skin TYPE`` unless ``skin`` is False)."""
     g = p.add_argument_group("face")
-    g.add_argument("--face", metavar="MESH", help="face mesh (OBJ/PLY/GLB/glTF with a .landmarks.json sidecar); "
-                   "default: the embedded face")
+    g.add_argument("--face", metavar="MESH", help="face: 'ict' (the scanned ICT Face Model), 'procedural' (the "
+                   "default), or a mesh (OBJ/PLY/GLB/glTF with a .landmarks.json sidecar)")
+    g.add_argument("--identity", metavar="SEED|W,...", help="with --face ict: a speaker from ICT's identity space, "
+                   "drawn by an integer seed or given as weights of its first modes (standard deviations, +-3)")
     g.add_argument("--landmarks", metavar="JSON", help="landmarks sidecar of --face, if not beside it")
     g.add_argument("--rig", metavar="TOML", help="rig file (default: the shipped data/rig/default.toml)")
+    if skin:
+        add_skin_argument(g)
+
+
+def _skin_type(text: str) -> str:
+    """argparse type of ``--skin``: the preset's name, refused at once when unknown."""
+    from visemeface.errors import InputError
+    from visemeface.face.colouring import skin_tone
+
+    try:
+        skin_tone(text)
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text.strip().upper()
+
+
+def add_skin_argument(g) -> None:
+    """``--skin TYPE``: the embedded face's skin-tone preset (data/face/skin_tones.toml; checked by
+    :func:`visemeface.face.colouring.skin_tone` when the face is built)."""
+    g.add_argument("--skin", metavar="TYPE", type=_skin_type,
+                   help="skin and lip colours of the embedded face: a Fitzpatrick type from I (lightest) to VI "
+                   "(darkest), presets in data/face/skin_tones.toml (default III, the original colours)")
 
 
 def build_rig(args):
-    """The rig of ``--face``/``--landmarks``/``--rig`` (default: the embedded face and shipped rig)."""
-    from visemeface.errors import InputError
-    from visemeface.muscles.rig import MuscleRig, default_rig
+    """The rig of ``--face``/``--landmarks``/``--rig``/``--identity``/``--skin``
+    (:func:`visemeface.muscles.rig.rig_for`)."""
+    from visemeface.muscles.rig import rig_for
 
-    if getattr(args, "landmarks", None) and not getattr(args, "face", None):
-        raise InputError("--landmarks needs --face")
-    if getattr(args, "face", None):
-        from visemeface.face.mesh import load_face
-        return MuscleRig.from_file(load_face(args.face, args.landmarks), args.rig)
-    if getattr(args, "rig", None):
-        from visemeface.face.procedural import default_face
-        return MuscleRig.from_file(default_face(), args.rig)
-    return default_rig()
+    return rig_for(getattr(args, "face", None), getattr(args, "landmarks", None), getattr(args, "rig", None),
+                   getattr(args, "identity", None), getattr(args, "skin", None))
 
 
 # --------------------------------------------------------------------------- rendering
@@ -97,7 +195,8 @@ def sinks_from_args(args, default_video: Path, defaults: dict | None = None) -> 
         raise InputError("-o/--output names a video, but --no-video asks for none")
     if not args.no_video:
         sinks.append(SINKS["video"](args.output or default_video, force=args.force))
-    sinks += others(args, force=args.force, skip=("video",), video=args.output or default_video, resume=args.resume)
+    sinks += others(args, force=args.force, skip=("video",), video=None if args.no_video else args.output or default_video,
+                    resume=args.resume)
     for name, path in (defaults or {}).items():
         if not any(s.name == name for s in sinks):
             sinks.append(SINKS[name](path, force=args.force))
@@ -116,26 +215,40 @@ def add_physics_arguments(p: argparse.ArgumentParser, default: str, choices: tup
                    help="sticky: the FEM face with saliva that glues the lips until it breaks; elastic: the same "
                    "FEM without glue" + ("; none: the kinematic rig" if "none" in choices else "")
                    + " (the FEM costs about 8 s per second of speech on 2 cores)")
-    g.add_argument("--glue", type=float, metavar="G", help="glue strength K_glue (default 0.08)")
+    from visemeface.physics.glue import MAX_GLUE
+
+    g.add_argument("--lips", choices=LIPS, default=LIPS[0],
+                   help="default: the speech lips (refined along the seam, cohesive saliva strands, the film into "
+                   "the corners, a stiffening tissue); seed: Leach & Maddock's (2018) model, the same as "
+                   "--seam-elements 0 --rupture-time 0 --no-film-corners --tissue-limit inf. The options below "
+                   "change either")
+    g.add_argument("--glue", type=number(0, MAX_GLUE), metavar="G",
+                   help=f"glue strength K_glue, 0 to {MAX_GLUE:g} (default 0.08)")
     g.add_argument("--glue-profile", metavar="SPEC", help="glue across the mouth over --glue, e.g. "
                    "centre=0.18 or right=0.3,left=0 (WHERE: centre (the mouth's central twelfth), left, right, corners, "
                    "all, or a..b of s, -1 at the right corner to +1 at the left)")
-    g.add_argument("--moisture", type=float, metavar="M", help="initial saliva moisture M0 (default 100)")
-    g.add_argument("--evaporation", type=float, metavar="E", help="moisture lost per second (default 0)")
-    g.add_argument("--rupture-time", type=float, metavar="S", help="saliva strands thin over S seconds before they "
-                   "snap (default 0.03: the lips unzip from the centre; 0: the seed's brittle film)")
-    g.add_argument("--seam-elements", type=int, metavar="N", help="refine the lips to at least N tissue elements "
+    g.add_argument("--moisture", type=number(0), metavar="M", help="initial saliva moisture M0 (default 100)")
+    g.add_argument("--evaporation", type=number(0), metavar="E", help="moisture lost per second (default 0)")
+    g.add_argument("--rupture-time", type=number(0), metavar="S", help="saliva strands thin over S seconds before they "
+                   "snap (default 0.03: the lips unzip from the centre; 0: Leach & Maddock's brittle film)")
+    g.add_argument("--seam-elements", type=number(0, MAX_SEAM_ELEMENTS, integer=True), metavar="N", help="refine the lips to at least N tissue elements "
                    "along the seam: each seam edge split into equal parts, so the next multiple of the face's "
                    "own count (12 on the default face; default 48, one per saliva slab; 0: the face's own, the "
-                   "seed's mesh)")
-    g.add_argument("--tissue-limit", type=float, metavar="L", help="the soft tissue stiffens without bound as its "
+                   "mesh of Leach & Maddock's model)")
+    g.add_argument("--tissue-limit", type=number(1, low_open=True, infinite=True), metavar="L", help="the soft tissue stiffens without bound as its "
                    "stretch, volume change taken out, nears L (Gent's law; default 2.8: a strong --glue 0.3 lets go at "
-                   "full jaw; inf: the seed's neo-Hookean tissue, which never stiffens: the lips stretch 7x and hold)")
+                   "full jaw; inf: Leach & Maddock's neo-Hookean tissue, which never stiffens: the lips stretch 7x and hold)")
     g.add_argument("--film-corners", action=argparse.BooleanOptionalAction, default=None,
                    help="carry the saliva film into the mouth corners, where the lips meet (default: on; "
-                   "--no-film-corners ends it at the last pair of lip vertices, the seed's film, whose unglued "
+                   "--no-film-corners ends it at the last pair of lip vertices, Leach & Maddock's film, whose unglued "
                    "corners open as notches while the rest is stuck)")
     return g
+
+
+#: ``--lips``: the speech lips (:meth:`PhysicsSettings.speech`) or Leach & Maddock's (2018) model
+#: (``PhysicsSettings()``: the face's own seam elements, a brittle film ending at the last lip pair,
+#: neo-Hookean tissue).
+LIPS = ("default", "seed")
 
 
 #: Most tissue elements along the lip seam ``--seam-elements`` takes (the default face at 96: 6,848 hexahedra
@@ -154,6 +267,8 @@ def physics_from_args(args, **more):
     given = [f"--{'no-' if getattr(args, n) is False else ''}{n.replace('_', '-')}"       # as typed
              for n in ("glue", "glue_profile", "moisture", "evaporation", "rupture_time", "seam_elements",
                        "film_corners", "tissue_limit") if getattr(args, n, None) is not None]
+    if getattr(args, "lips", "default") != "default":
+        given.append(f"--lips {args.lips}")
     if args.physics == "none":
         if given:
             raise InputError(f"{given[0]} needs --physics sticky or elastic")
@@ -177,9 +292,9 @@ def physics_from_args(args, **more):
     if getattr(args, "film_corners", None) is not None:
         more["film_corners"] = args.film_corners
     if args.glue is not None:
-        if not (math.isfinite(args.glue) and args.glue >= 0):
-            raise InputError(f"--glue must be >= 0 and finite, got {args.glue:g}")
-        more["glue"] = args.glue
+        from visemeface.physics.glue import MAX_GLUE
+
+        more["glue"] = check_number(args.glue, "--glue", 0, MAX_GLUE)
     if getattr(args, "tissue_limit", None) is not None:
         if not args.tissue_limit > 1.0:
             raise InputError(f"--tissue-limit must be a stretch > 1 (inf: none), got {args.tissue_limit:g}")
@@ -189,7 +304,7 @@ def physics_from_args(args, **more):
             raise InputError(f"--seam-elements must be in 0..{MAX_SEAM_ELEMENTS} (0: the face's own elements), "
                              f"got {args.seam_elements}")
         more["seam_elements"] = args.seam_elements or None
-    base = PhysicsSettings.speech()
+    base = PhysicsSettings() if getattr(args, "lips", "default") == "seed" else PhysicsSettings.speech()
     try:
         saliva = dataclasses.replace(base.saliva, **params)
     except InputError as e:
@@ -219,12 +334,9 @@ def checkpoint_of(motion, sinks, args):
 
 
 def check_fps_option(fps: float) -> float:
-    from visemeface.errors import InputError
     from visemeface.track import MAX_FPS
 
-    if not (math.isfinite(fps) and 0 < fps <= MAX_FPS):
-        raise InputError(f"--fps must be in (0, {MAX_FPS:g}], got {fps:g}")
-    return fps
+    return check_number(fps, "--fps", 0, MAX_FPS, low_open=True, what="frames per second")
 
 
 # --------------------------------------------------------------------------- listings
@@ -300,4 +412,18 @@ def recording_utterance(recording: Path, text, text_file, quiet: bool = False):
 
     check_audio(recording)                     # an unreadable recording is the only line, before any note
     words, path = text_of(recording, text, text_file, quiet)
-    return utterance_from_audio(recording, words, text_where=path)
+    utterance = utterance_from_audio(recording, words, text_where=path)
+    if not quiet and words is None:            # after the recognition: an error stays the only line
+        import sys
+
+        print(f"visemeface: note: no text for {recording.name}: its phones were recognised (give --text \"...\" "
+              "to align its words: more accurate)", file=sys.stderr)
+    if not quiet and "confidence" in utterance.words:
+        doubtful = utterance.words[utterance.words["confidence"] < 0.5]
+        if len(doubtful):
+            import sys
+
+            shown = ", ".join(f"{w!r} at {s:.2f} s ({c:.2f})" for s, w, c in
+                              doubtful[["start", "word", "confidence"]].itertuples(index=False))
+            print(f"visemeface: note: doubtful in the audio: {shown}; check these words", file=sys.stderr)
+    return utterance

@@ -1,4 +1,4 @@
-"""``visemeface analyze``: mouth-opening profile of a video or frame folder (seed 001 §4)."""
+"""``visemeface analyze``: mouth-opening profile of a video or frame folder (Leach & Maddock 2019, §4)."""
 
 from __future__ import annotations
 
@@ -16,6 +16,10 @@ OVERLAY_MIN_BOX = 200
 #: correlations 0.91 / 0.84 / no opening at all against the original.
 MIN_MOUTH_PX = 20
 
+#: Largest margin --pad takes, in mouth widths: ten widths hold any face around its mouth (the region is
+#: clipped to the frame anyway); more is a mistyped number (1e308 overflowed the pixel arithmetic).
+MAX_PAD = 10.0
+
 
 def _ranges(frames: list[int]) -> str:
     """``[3, 4, 5, 9]`` -> ``"frames 3-5, 9"`` (at most 5 runs, then "...")."""
@@ -28,7 +32,7 @@ def _ranges(frames: list[int]) -> str:
 
 
 def overlay_image(frame, openings, margin, label: str):
-    """The mouth box with ``margin`` (seed 001 Figs. 7-15) cut from an RGB ``frame``, enlarged to
+    """The mouth box with ``margin`` (Leach & Maddock 2019, Figs. 7-15) cut from an RGB ``frame``, enlarged to
     :data:`OVERLAY_MIN_BOX`, with the box, the opening outlines and ``label`` drawn on it."""
     import dataclasses
     import math
@@ -55,10 +59,14 @@ def register(subparsers) -> None:
         "analyze",
         help="measure mouth openings frame by frame (count, area, width, height) -> CSV and plots",
         description="Measure the mouth openings of every frame of a video (MP4/AVI/MPG/...) or a folder of "
-        "PNG/JPG frames. Default method 'lips': the lips are segmented by colour (redder than skin, Lab a*) "
-        "and the opening is the region enclosed between the upper and the lower lip, teeth and tongue "
-        "included (real mouths are rarely a dark hole); small, compressed mouths (40 px in MPEG-1) are "
-        "resampled first. Method 'seed' is seed 001's: greyscale, median blur, dark threshold, top-level "
+        "PNG/JPG frames. Default method 'mesh': the face mesh's inner-lip contour bounds where the opening can be and, "
+        "inside it, the opening is what is unlike the speaker's own lips -- a dark cavity, bright or grey teeth -- "
+        "and the tongue between them, measured relative to the lips so that it holds for any skin or lip colour, "
+        "with a moustache or beard, in grey video (without a face mesh for a frame: a given box or a close-up, the "
+        "bound comes from the lips found by colour). Method 'lips': the lips segmented by colour (redder than "
+        "skin, Lab a*) and the region enclosed between them, teeth and tongue included; small, compressed mouths "
+        "(40 px in MPEG-1) are resampled first. Method 'seed' is Leach & Maddock's (2019): greyscale, median blur, dark "
+        "threshold, top-level "
         "contours. Per frame: number of openings and the largest one's area, width and height, "
         "normalised by the mouth width (the box width: its left/right edges on the mouth corners; "
         "area by the width squared), plus frame differences of area and width. The mouth box comes "
@@ -81,10 +89,13 @@ def register(subparsers) -> None:
                    "(default: the sidecar's, else found automatically in every frame)")
     p.add_argument("--box-json", metavar="FILE",
                    help="sidecar JSON with \"mouth_box\" (default: <input>.json or <input stem>.json if present)")
-    p.add_argument("--fps", type=float, help="frame rate (default: the video's, the sidecar's, or 30 for folders)")
-    p.add_argument("--method", choices=("lips", "seed"), default="lips",
-                   help="'lips' (default): the region enclosed between the lips, teeth and tongue included; "
-                   "'seed': seed 001's dark threshold")
+    p.add_argument("--fps", type=opt.number(0, low_open=True), help="frame rate (default: the video's, the sidecar's, or 30 for folders)")
+    p.add_argument("--method", choices=("mesh", "lips", "seed"), default="mesh",
+                   help="'mesh' (default): inside the face mesh's inner-lip contour, what is unlike the speaker's "
+                   "own lips (dark cavity, bright or grey teeth) and what lies between it, whatever the skin or "
+                   "lip colour (without a face mesh -- a given box, a close-up -- between the lips found by colour); "
+                   "'lips': the region enclosed between the lips segmented by colour (redder than skin), teeth and "
+                   "tongue included; 'seed': Leach & Maddock's (2019) dark threshold")
     p.add_argument("--threshold", default="otsu", metavar="N|otsu",
                    help="seed: grey level 0-255 at or below which a pixel is mouth opening, or 'otsu' (default); "
                    "lips: a grey level at or below which a pixel is never lip (default: relative to the lips)")
@@ -92,14 +103,14 @@ def register(subparsers) -> None:
     p.add_argument("--teeth", action="store_true",
                    help="seed method: count bright unsaturated pixels (teeth) touching the opening as opening "
                    "(the lips method always counts teeth between the lips)")
-    p.add_argument("--min-height", type=float, default=0.05, metavar="F",
+    p.add_argument("--min-height", type=opt.number(0, 1, high_open=True), default=0.05, metavar="F",
                    help="lips method: an opening nowhere F * mouth_width thick is the seam of closed lips, "
                    "one less than that wide a speck (default 0.05)")
-    p.add_argument("--min-area", type=float, default=5e-4, metavar="F",
+    p.add_argument("--min-area", type=opt.number(0, 1, high_open=True), default=5e-4, metavar="F",
                    help="drop openings smaller than F * mouth_width^2 pixels (default 5e-4)")
     p.add_argument("--pad", default="0.1,0.1,0.1,0.4", metavar="F|L,T,R,B",
                    help="also analyse this margin around the box, in mouth widths (left,top,right,bottom; "
-                   "default 0.1,0.1,0.1,0.4: room for the jaw to drop); 0 = exactly the box")
+                   f"default 0.1,0.1,0.1,0.4: room for the jaw to drop; each 0 to {MAX_PAD:g}); 0 = exactly the box")
     p.add_argument("--plot", metavar="PNG", help="also plot the profile over time (.png, .pdf or .svg)")
     p.add_argument("--overlay", metavar="DIR", help="write every frame's mouth region with the detected outlines")
     p.add_argument("--force", action="store_true", help="overwrite existing outputs")
@@ -113,20 +124,18 @@ def _threshold(text: str):
     if text.strip().lower() == "otsu":
         return "otsu"
     try:
-        value = float(text)
-    except ValueError:
-        raise InputError(f"--threshold must be a grey level 0-255 or 'otsu', got {text!r}") from None
-    return value
+        return opt.check_number(text, "--threshold", 0, 255, what="a grey level, or 'otsu'")
+    except InputError:
+        raise InputError(f"--threshold must be a grey level 0-255 or 'otsu', got {opt.shown(text)}") from None
 
 
 def _pad(text: str):
     from visemeface.errors import InputError
 
-    try:
-        vals = tuple(float(v) for v in text.split(","))
-    except ValueError:
-        raise InputError(f"--pad must be 1 or 4 numbers (left,top,right,bottom), got {text!r}") from None
-    return vals
+    vals = text.split(",")
+    if len(vals) not in (1, 4):
+        raise InputError(f"--pad must be 1 or 4 numbers (left,top,right,bottom), got {opt.shown(text)}")
+    return tuple(opt.check_number(v, "--pad", 0, MAX_PAD, what="mouth widths") for v in vals)
 
 
 def run(args) -> int:
@@ -166,7 +175,7 @@ def run(args) -> int:
     for out in outputs:
         check_new(out, args.force)
 
-    fps = args.fps
+    fps = args.fps if args.fps is None else opt.check_fps_option(args.fps)
     if fps is None and sidecar is not None and Path(args.input).is_dir():
         fps = sidecar.fps
     source = open_frames(args.input, fps)

@@ -55,7 +55,7 @@ def _grid_count(value: str):
 
 def register(subparsers) -> None:
     from visemeface.export import SINKS
-    from visemeface.physics.drive import PHYSICS
+    from visemeface.physics import PHYSICS
     from visemeface.render import VIEWS
     from visemeface.speech.timeline import MODES
 
@@ -63,7 +63,7 @@ def register(subparsers) -> None:
         "batch", help="make many clips from a CSV manifest on a Dask cluster (corpora at scale)",
         description="Make one clip per manifest row (a transcript or text, with its own emotion, physics, "
         "frame rate, size and outputs), on a local Dask cluster or any Dask scheduler; idempotent and resumable.",
-        epilog=EPILOG % {"sinks": ", ".join(SINKS)}, formatter_class=argparse.RawDescriptionHelpFormatter)
+        epilog=EPILOG % {"sinks": ", ".join(SINKS)}, formatter_class=opt.Help)
     p.add_argument("manifest", type=Path, metavar="MANIFEST", help="CSV manifest, one row per clip")
     p.add_argument("-o", "--output", type=Path, metavar="DIR",
                    help="output folder, one sub-folder per clip (default: MANIFEST's stem)")
@@ -88,7 +88,7 @@ def register(subparsers) -> None:
     d.add_argument("--msaa", type=int, default=4, metavar="N", help="antialiasing samples: 0, 2, 4, 8 or 16")
     d.add_argument("--interp", choices=MODES, default=MODES[0], help="interpolation between visemes")
     d.add_argument("--rate", type=float, metavar="WPM", help="speaking rate of text rows (words per minute)")
-    opt.add_face_arguments(p)
+    opt.add_face_arguments(p, skin=False)          # workers build the face from face/landmarks/rig only
     g = p.add_argument_group("example corpus")
     g.add_argument("--grid", type=_grid_count, metavar="N|all", help="write MANIFEST: N sentences of the GRID "
                    "corpus's grammar (or all 64,000), then stop")
@@ -141,10 +141,13 @@ def _settings(args) -> dict:
     from visemeface.batch.manifest import check_settings, defaults
     from visemeface.errors import InputError
 
+    from visemeface.face import BUILTIN_FACES
+
     s = defaults(outputs=args.outputs, emotion=args.emotion or (), physics=args.physics, fps=args.fps,
-                 size=args.size, view=args.view, msaa=args.msaa, interp=args.interp, rate=args.rate)
+                 size=args.size, view=args.view, msaa=args.msaa, interp=args.interp, rate=args.rate,
+                 identity=args.identity)
     try:
-        check_settings({**s, "text": "check"})
+        check_settings({**s, "text": "check", "face": args.face})
     except InputError as e:
         message = str(e)
         raise InputError(("--" if message.split()[0] in s else "") + message) from None
@@ -152,7 +155,8 @@ def _settings(args) -> dict:
         opt.build_rig(args)          # refuse a bad face or rig before any worker starts
     for name in ("face", "landmarks", "rig"):
         value = getattr(args, name)
-        s[name] = str(Path(value).resolve()) if value else None
+        builtin = name == "face" and value in BUILTIN_FACES
+        s[name] = value if builtin else str(Path(value).resolve()) if value else None
     return s
 
 

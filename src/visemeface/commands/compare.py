@@ -1,8 +1,12 @@
-"""``visemeface compare``: L2 distance, correlation and time offset between mouth-opening profiles (seed 001 §5)."""
+"""``visemeface compare``: L2 distance, correlation and time offset between mouth-opening profiles (Leach & Maddock 2019, §5)."""
 
 from __future__ import annotations
 
 ORDER = 81
+
+#: Largest --max-lag, in frames: 33 s at 30 fps, far beyond any offset between two takes of one sentence
+#: (and the search costs one correlation per lag: 999999999999 never ended).
+MAX_LAG = 1000
 
 
 def register(subparsers) -> None:
@@ -20,13 +24,47 @@ def register(subparsers) -> None:
     )
     p.add_argument("reference", metavar="A.csv", help="reference profile")
     p.add_argument("others", nargs="+", metavar="B.csv", help="profile(s) to compare with the reference")
-    p.add_argument("--max-lag", type=int, default=5, metavar="N",
-                   help="search time offsets of -N..N frames (default 5; 0 = no search)")
+    from visemeface.commands._options import number
+
+    p.add_argument("--max-lag", type=number(0, MAX_LAG, integer=True), default=5, metavar="N",
+                   help=f"search time offsets of -N..N frames, N up to {MAX_LAG} (default 5; 0 = no search)")
+    p.add_argument("--span", default="all", metavar="all|speech|T0..T1",
+                   help="the time span compared: all (default: all both profiles cover), speech (the speech "
+                   "span of --audio's sound, found relative to its noise floor), "
+                   "or T0..T1 in seconds")
+    p.add_argument("--audio", metavar="FILE", help="recording or video whose sound gives --span speech (e.g. the "
+                   "real clip the reference profile was measured on)")
     p.add_argument("--lag-metric", choices=("area", "width", "height"), default="height",
                    help="the metric whose correlation the offset maximises (default height)")
     p.add_argument("--plot", metavar="PNG", help="plot all profiles overlaid, each other one shifted by its lag (.png, .pdf or .svg)")
     p.add_argument("--force", action="store_true", help="overwrite the plot if it exists")
     p.set_defaults(func=run)
+
+
+def _span(args):
+    """(t0, t1) of ``--span`` (None: all), ``--audio`` checked; the speech span read from the audio."""
+    from visemeface.commands._options import check_number
+    from visemeface.errors import InputError
+
+    text = str(args.span).strip().lower()
+    if text != "speech" and args.audio is not None:
+        raise InputError("--audio gives the speech span: it needs --span speech")
+    if text == "all":
+        return None
+    if text == "speech":
+        if args.audio is None:
+            raise InputError("--span speech needs --audio FILE, the recording whose speech span is compared")
+        from visemeface.speech.audio import read_audio, speech_span
+
+        samples, rate = read_audio(args.audio)
+        return speech_span(samples, rate, where=args.audio)
+    ends = text.split("..")
+    if len(ends) != 2:
+        raise InputError(f"--span must be all, speech or T0..T1 (seconds), got {args.span!r}")
+    t0, t1 = (check_number(v, "--span", 0, 86_400, what="seconds") for v in ends)
+    if not t1 > t0:
+        raise InputError(f"--span must end after it starts, got {args.span!r}")
+    return t0, t1
 
 
 def _fmt(v: float, spec: str) -> str:
@@ -43,10 +81,17 @@ def run(args) -> int:
 
     if args.max_lag < 0:
         raise InputError(f"--max-lag must be >= 0, got {args.max_lag}")
+    span = _span(args)
     if args.plot:
         check_new(check_suffix(args.plot, ".png", ".pdf", ".svg"), args.force)
     paths = [args.reference, *args.others]
     profiles = {p: read_profile(p) for p in paths}
+    if span is not None:
+        from visemeface.analysis.profiles import within
+
+        profiles = {p: within(df, *span) for p, df in profiles.items()}
+        print(f"over {span[0]:.2f}..{span[1]:.2f} s" + (" (the speech of " + str(args.audio) + ")"
+                                                       if args.span.strip().lower() == "speech" else ""))
     ref = profiles[args.reference]
     rows = []
     for p in args.others:

@@ -35,7 +35,7 @@ def register(subparsers) -> None:
         description="Find when each phone of a recording is spoken, offline (pocketsphinx's US-English model): "
         "forced alignment of the words if given, else phone recognition. Writes a transcript that "
         "`visemeface speak` animates.",
-        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+        epilog=EPILOG, formatter_class=opt.Help)
     p.add_argument("recording", type=Path, metavar="RECORDING", help="sound file or video with speech")
     opt.add_text_arguments(p)
     p.add_argument("-o", "--output", type=Path, metavar="OUT",

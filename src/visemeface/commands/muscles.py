@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import argparse
+from visemeface.commands._options import Help
 
 ORDER = 21
 
@@ -16,7 +16,7 @@ def register(subparsers) -> None:
         "turn: gaze; rotation: the jaw), side, activation range (values outside are clamped) and lip side "
         "(upper-lip muscles move nothing below the lip seam, lower-lip muscles nothing above it, both: not "
         "trimmed).",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=Help,
         epilog="examples:\n  visemeface muscles\n  visemeface muscles --csv > muscles.csv",
     )
     p.add_argument("--csv", action="store_true", help="print CSV instead of an aligned table")

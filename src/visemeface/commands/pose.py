@@ -14,10 +14,10 @@ def register(subparsers) -> None:
         "pose",
         help="render a muscle posture (viseme, emotion, single muscles) to a PNG",
         description="Pose the face with the Waters muscle rig and render it. Start from a viseme "
-        "(DECtalk symbol) and/or emotions blended as in seed 002, then set single muscles with --set. "
+        "(DECtalk symbol) and/or emotions blended as in Edge & Maddock (2001), then set single muscles with --set. "
         "Activations are clamped to each muscle's range (a warning names them). Prints the lip "
         "dimensions of the pose.",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=opt.Help,
         epilog="examples:\n"
         "  visemeface pose --set zygomatic_major_left=0.8 --set jaw=0.3 -o pose.png\n"
         "  visemeface pose uw --emotion happiness=0.5 --view mouth -o uw_happy.png\n"
@@ -34,10 +34,7 @@ def register(subparsers) -> None:
 
     p.add_argument("--view", default="face", choices=VIEWS, help="camera (default face)")
     p.add_argument("--size", default="512", metavar="W[xH]", help="image size in pixels, multiples of 16 (default 512)")
-    p.add_argument("--rig", metavar="TOML", help="rig file (default: the shipped data/rig/default.toml)")
-    p.add_argument("--face", metavar="MESH", help="face mesh (OBJ/PLY/GLB/glTF with a .landmarks.json sidecar); "
-                   "default: the embedded face")
-    p.add_argument("--landmarks", metavar="JSON", help="landmarks sidecar of --face, if not beside it")
+    opt.add_face_arguments(p)
     p.add_argument("--show-muscles", action="store_true",
                    help="draw the muscles over the render: attachment -> insertion vectors (blue upper lip, "
                    "orange lower lip, green untrimmed) and the zones of the active muscles")

@@ -26,7 +26,7 @@ def register(subparsers) -> None:
         "preview", help="write a self-contained web page (three.js) that plays a .glb with its sound",
         description="Write one HTML page that plays a binary glTF animation (from --gltf) in sync with a "
         "sound file, with play/pause and a scrubber; three.js, the glb and the sound are inlined.",
-        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+        epilog=EPILOG, formatter_class=opt.Help)
     p.add_argument("glb", type=Path, metavar="FILE.glb", help="binary glTF animation (speak/say --gltf)")
     p.add_argument("--audio", type=Path, metavar="SOUND",
                    help="sound to play with it (.wav, .mp3, .ogg, .flac, .m4a; starts at t=0)")

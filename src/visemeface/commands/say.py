@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from visemeface.commands.speak import add_animation_arguments, animate_utterance, check_early
+from visemeface.commands._options import Help
+from visemeface.commands.speak import add_animation_arguments, animate_utterance, check_early, check_rig_and_emotions
 
 ORDER = 21
 
@@ -18,8 +19,9 @@ examples:
   visemeface say "Hello there." --silent -o quiet.mp4           # no synthesised voice
 
 With the optional extra installed (pip install "visemeface[tts]": eSpeak NG, GPL-3.0) the text is
-spoken, the phones are aligned to that sound and it is muxed into the video; without it the
-video is silent and the phones are timed by the duration model (--rate).
+spoken, the phones are aligned to that sound (or, where it does not align, timed by the
+synthesiser's own phone events) and it is muxed into the video; without it the video is silent
+and the phones are timed by the duration model (--rate).
 """
 
 
@@ -30,7 +32,7 @@ def register(subparsers) -> None:
         description="Turn English text into phonemes (CMU dictionary, numbers, ordinals and money spelled out, "
         "a letter-to-sound fallback for unknown words), time them (--rate, or aligned to a recording of them, --audio) and "
         "animate the face. Takes every option of `visemeface speak` after the transcript.",
-        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+        epilog=EPILOG, formatter_class=Help)
     p.add_argument("text", metavar="TEXT", help="what to say (quote it)")
     p.add_argument("--rate", type=float, metavar="WPM", default=None,
                    help="speaking rate in words per minute (not with --audio, which times the text)")
@@ -61,10 +63,14 @@ def run(args) -> int:
         if speak_aloud and not args.quiet and any(s.name == "video" for s in sinks):
             print(f"visemeface: note: {tts.HINT}", file=sys.stderr)   # after the run: an error stays the only line
         return status
-    from visemeface.speech.align import utterance_from_audio
-
     text_to_utterance(args.text, rate_wpm=args.rate)        # the text's own errors first (tags, rate)
+    rig = check_rig_and_emotions(args)                      # and the face's and emotions' before speaking
     with tempfile.TemporaryDirectory(prefix="visemeface-") as folder:
-        wav = tts.synthesise(args.text, Path(folder) / "say.wav", rate_wpm=args.rate)
-        utterance = utterance_from_audio(wav, args.text, where="synthesised speech", check_text=False)
-        return animate_utterance(utterance, args, sinks, render, physics, audio=wav, saved=saved)
+        synthesis = tts.synthesise(args.text, Path(folder) / "say.wav", rate_wpm=args.rate)
+        utterance, how = tts.utterance_of(synthesis, args.text, args.rate)
+        status = animate_utterance(utterance, args, sinks, render, physics, audio=synthesis.path, saved=saved,
+                                   rig=rig)
+    if how != "aligned" and not args.quiet:                  # after the run: an error stays the only line
+        print(f"visemeface: note: the synthesised speech timed by {'its phone events' if how == 'events' else how}"
+              " (its sound did not align to the text)", file=sys.stderr)
+    return status

@@ -15,16 +15,18 @@ def register(subparsers) -> None:
         "sheet",
         help="render a labelled contact sheet of all 56 visemes (or of the emotions)",
         description="Render every viseme of the shipped table (or, with --emotions, every emotion) "
-        "on the default face and tile the pictures, each labelled, into one PNG.",
+        "on the default face (or --face) and tile the pictures, each labelled, into one PNG.",
         epilog="examples:\n  visemeface sheet -o visemes.png\n"
         "  visemeface sheet --emotions -o emotions.png --view face\n"
         "  visemeface sheet --emotion happiness=0.5 -o happy_visemes.png\n"
         "  visemeface sheet --emotion surprise=0.6 --keep-contact -o surprised_visemes.png",
-        formatter_class=__import__("argparse").RawDescriptionHelpFormatter,
+        formatter_class=opt.Help,
     )
     p.add_argument("-o", "--output", required=True, help="PNG file to write")
     p.add_argument("--emotions", action="store_true",
                    help="tile the emotions (and the neutral face) instead of the visemes")
+    p.add_argument("--weight", type=float, default=None, metavar="W",
+                   help="with --emotions: each emotion at weight W, 0..1 (default 1)")
     p.add_argument("--emotion", action="append", metavar="NAME[=W]", default=None,
                    help="blend every viseme with this emotion at weight W (default 1); repeatable")
     p.add_argument("--keep-contact", action="store_true",
@@ -34,6 +36,7 @@ def register(subparsers) -> None:
     p.add_argument("--view", choices=VIEWS, default=None,
                    help="camera: face, mouth or three-quarter (default: mouth for visemes, face for emotions)")
     p.add_argument("--columns", type=int, default=None, help="tiles per row (default 8 for visemes, 4 for emotions)")
+    opt.add_face_arguments(p)
     p.add_argument("--force", action="store_true", help="overwrite the output if it exists")
     opt.add_quiet(p)
     p.set_defaults(func=run)
@@ -80,7 +83,6 @@ def run(args) -> int:
 
     from visemeface.animate import parse_emotions
     from visemeface.errors import InputError
-    from visemeface.muscles.rig import default_rig
     from visemeface.outputs import atomic_output, check_new, check_suffix, progress
     from visemeface.postures.library import load_expressions, load_visemes, posed_vertices
     from visemeface.render.renderer import Renderer
@@ -91,15 +93,20 @@ def run(args) -> int:
         raise InputError(f"--columns must be at least 1, got {args.columns}")
     if args.emotions and args.emotion:
         raise InputError("give either --emotions (a sheet of the emotions) or --emotion NAME=W (blend), not both")
+    if args.weight is not None and not args.emotions:
+        raise InputError("--weight sets the emotions' weight in a sheet of the emotions; give --emotions")
+    weight = 1.0 if args.weight is None else float(args.weight)
+    if not 0.0 <= weight <= 1.0:
+        raise InputError(f"--weight must be between 0 and 1, got {args.weight:g}")
     if args.keep_contact and not args.emotion:
         raise InputError("--keep-contact keeps p b m f v closed under an --emotion; give one")
     check_new(check_suffix(args.output, ".png"), args.force)
-    rig = default_rig()
+    rig = opt.build_rig(args)
     mix = parse_emotions(args.emotion, load_expressions(rig=rig).index)
     if args.emotions:
         names = ["_"] + load_expressions(rig=rig).index.tolist()
-        poses = [("_", {})] + [("_", {e: 1.0}) for e in names[1:]]
-        labels = ["neutral"] + names[1:]
+        poses = [("_", {})] + [("_", {e: weight}) for e in names[1:]]
+        labels = ["neutral"] + [n if weight == 1 else f"{n} {weight:g}" for n in names[1:]]
         view, columns = args.view or "face", args.columns or 4
     else:
         table = load_visemes(rig=rig)

@@ -1,4 +1,4 @@
-"""``visemeface simulate SCENARIO``: the sticky-lip FEM face in one of the seed's experiments.
+"""``visemeface simulate SCENARIO``: the sticky-lip FEM face in one of Leach & Maddock's (2018, 2019) experiments.
 
 Builds the FEM face (lower face extruded to hexahedra, saliva between the
 lips), drives it with a scenario's activation track, and streams the motion
@@ -10,31 +10,37 @@ every frame; after Ctrl-C, ``--resume`` continues from it.
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 
 from visemeface.commands import _options as opt
 
 ORDER = 60
 
+#: --dt's range in s. Below 1e-6 a second of motion is over a million steps (about 5 minutes here), and far
+#: below it the step is no time at all (1e-308 was reported as a divergence); above 0.01 it is longer than a
+#: frame at 100 fps, and beyond the film's stable step, which a run refuses anyway.
+MIN_DT, MAX_DT = 1e-6, 0.01
+#: Largest --damping (1/s): the motion then relaxes in 0.1 ms, far past critical damping of any of the
+#: face's modes; 1e308 overflowed the integrator.
+MAX_DAMPING = 1e4
+
 EPILOG = """\
 examples:
-  visemeface simulate open --glue 0.08 -o open.mp4        # jaw lowered and raised twice (seed 001 Fig. 18)
+  visemeface simulate open --glue 0.08 -o open.mp4        # jaw lowered and raised twice (Leach & Maddock 2019, Fig. 18)
   visemeface simulate open --physics elastic -o open_elastic.mp4   # the same FEM without glue
   visemeface simulate open-once -o zip.mp4               # the lips unzip from the centre (0.67 of the mouth by its end)
-  visemeface simulate open-once --rupture-time 0 --seam-elements 0 --no-film-corners --tissue-limit inf -o seed.mp4   # the seed's model
+  visemeface simulate open-once --lips seed -o seed.mp4   # Leach & Maddock's (2018) model
   visemeface simulate open-once --glue-profile centre=0.18 -o two.mp4   # glue strongest at the centre
   visemeface simulate open --evaporation 40 -o dry.mp4    # later openings unzip faster
   visemeface simulate open-once --side left -o left.mp4   # one-sided lower-lip pull: asymmetric opening
   visemeface simulate open -o open.mp4 --resume           # continue an interrupted run
 
-The lips are refined to 48 elements along the seam, the saliva strands thin
-over 0.03 s before they snap, the film runs into the mouth corners (issue 16;
---seam-elements 0 --rupture-time 0 --no-film-corners: the seed's mesh and brittle
-film, which parts in one frame), and the tissue stiffens without bound toward a
-stretch of 2.8 (Gent), so a strong glue (0.3) lets go at full jaw. With
---tissue-limit inf it is the seed's neo-Hookean, which never stiffens: under that
-glue the lips stretch 7x and hold.
+The default lips are refined to 48 elements along the seam, the saliva strands
+thin over 0.03 s before they snap, the film runs into the mouth corners, and the
+tissue stiffens without bound toward a stretch of 2.8 (Gent), so a strong glue
+(0.3) lets go at full jaw. --lips seed is Leach & Maddock's (2018) model: the
+face's own mesh, a brittle film that parts in one frame, a neo-Hookean tissue
+that never stiffens (under that glue the lips stretch 7x and hold).
 
 Writes OUTPUT (MP4) and OUTPUT's stem + .saliva.csv (--csv; per frame: time,
 jaw, broken fraction of the film along the seam, number and span of openings
@@ -48,50 +54,51 @@ left, right, corners, all or a range a..b of the position across the mouth
 
 
 def register(subparsers) -> None:
-    from visemeface.physics.drive import PHYSICS, SCENARIOS, SIDES
+    from visemeface.physics import PHYSICS
+    from visemeface.physics.scenarios import SCENARIOS, SIDES
 
     p = subparsers.add_parser(
-        "simulate", help="run the sticky-lip FEM face through a scenario (seed 000/001) -> MP4 + saliva CSV",
+        "simulate", help="run the sticky-lip FEM face through a scenario (Leach & Maddock 2018, 2019) -> MP4 + saliva CSV",
         description="Simulate the physically-based sticky-lip face (TLED FEM, breaking saliva elements) "
         "through a scenario and write the animation and the saliva state per frame.",
-        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+        epilog=EPILOG, formatter_class=opt.Help)
     p.add_argument("scenario", choices=sorted(SCENARIOS), help="the jaw eased to --jaw and back: open: opened "
                    "and closed twice; open-once: opened and held; part: opened to 0.45 of --jaw and held (a "
                    "slight opening the speech lips' glue holds shut; elastic lips part)")
     phys = opt.add_physics_arguments(p, "sticky", tuple(PHYSICS))
     phys.add_argument("--glue-file", type=Path, metavar="CSV", help="glue per film element (element,glue; "
                       "0 at the right corner, in order across the mouth) or a profile (s,glue)")
-    phys.add_argument("--critical-moisture", type=float, metavar="MC", help="critical moisture Mc (default 100)")
-    phys.add_argument("--dt", type=float, help="one time step in s for every node (default: multi-rate, the "
+    phys.add_argument("--critical-moisture", type=opt.number(0), metavar="MC", help="critical moisture Mc (default 100)")
+    phys.add_argument("--dt", type=opt.number(MIN_DT, MAX_DT), help=f"one time step in s for every node, {MIN_DT:g} "
+                      f"to {MAX_DT:g} (default: multi-rate, the "
                       "tissue's stable step with the lips' film nodes in substeps at the film's, printed at the "
                       "end; a step above the film's limit is refused)")
-    phys.add_argument("--damping", type=float, default=80.0, help="mass damping alpha in 1/s (default 80)")
-    phys.add_argument("--jaw", type=float, default=0.35, help="jaw activation when open (default 0.35)")
+    phys.add_argument("--damping", type=opt.number(0, MAX_DAMPING), default=80.0,
+                      help=f"mass damping alpha in 1/s, 0 to {MAX_DAMPING:g} (default 80)")
+    phys.add_argument("--jaw", type=opt.number(0, 1), default=0.35, help="jaw activation when open, 0 to 1 "
+                      "(default 0.35)")
     phys.add_argument("--side", choices=SIDES, default="both",
                       help="also pull the lower lip down on one side (asymmetric opening)")
-    phys.add_argument("--resolution", type=int, help="face vertices (default: the default face's)")
-    phys.add_argument("--threads", type=int, help="numba threads (default: the faster of all cores and one, "
+    phys.add_argument("--resolution", type=opt.number(300, 200_000, integer=True),
+                      help="face vertices, 300 to 200000 (default: the default face's)")
+    opt.add_skin_argument(phys)
+    phys.add_argument("--threads", type=opt.number(1, integer=True), help="numba threads (default: the faster of all cores and one, "
                       "timed during the run; the result is the same at any count)")
-    p.add_argument("--fps", type=float, default=60.0, help="frame rate (default 60, the seed's camera)")
+    p.add_argument("--fps", type=float, default=60.0, help="frame rate (default 60, Leach & Maddock's camera)")
     opt.add_render_arguments(p, view="mouth")
     opt.add_output_arguments(p, "SCENARIO.mp4", resumable="continue an interrupted run from its checkpoint")
     p.set_defaults(func=run)
 
 
 def _check(args) -> None:
-    from visemeface.errors import InputError
+    from visemeface.physics.glue import check_glue_sources
+    from visemeface.runtime import check_threads
 
     opt.check_fps_option(args.fps)
-    if not (math.isfinite(args.jaw) and 0 <= args.jaw <= 1):
-        raise InputError(f"--jaw must be an activation from 0 to 1, got {args.jaw}")
-    for name in ("dt", "damping"):
-        value = getattr(args, name)
-        if value is None:
-            continue
-        if not (math.isfinite(value) and value > 0 if name == "dt" else math.isfinite(value) and value >= 0):
-            raise InputError(f"--{name} must be a finite number {'> 0' if name == 'dt' else '>= 0'}, got {value:g}")
-    if args.resolution is not None and not 300 <= args.resolution <= 200_000:
-        raise InputError(f"--resolution must be from 300 to 200000 vertices, got {args.resolution}")
+    if args.threads is not None:
+        check_threads(args.threads)
+    if args.physics != "elastic":            # elastic refuses any glue option itself
+        check_glue_sources(args.glue_profile, args.glue_file)     # before the FEM face is built (seconds)
 
 
 def run(args) -> int:
@@ -106,7 +113,7 @@ def run(args) -> int:
     render = opt.render_from_args(args)
     physics = opt.physics_from_args(args, dt=args.dt, damping=args.damping, threads=args.threads,
                                     glue_file=None if args.glue_file is None else str(args.glue_file))
-    face = default_face(resolution=args.resolution)
+    face = default_face(resolution=args.resolution, skin=args.skin)
     rig = MuscleRig.from_file(face)
     track = scenario_track(args.scenario, rig.names, fps=args.fps, jaw=args.jaw, side=args.side)
     motion = opt.simulation_of(rig, track, args.physics, physics)          # every input check happens here

@@ -36,7 +36,7 @@ state after every frame in OUT.mp4.checkpoint/ and --resume continues from it.
 
 def add_animation_arguments(p: argparse.ArgumentParser, video_default: str) -> None:
     """Options shared by ``speak`` and ``say``: animation, face, physics, rendering, outputs."""
-    from visemeface.physics.drive import PHYSICS
+    from visemeface.physics import PHYSICS
     from visemeface.speech.timeline import MODES
 
     anim = p.add_argument_group("animation")
@@ -48,6 +48,12 @@ def add_animation_arguments(p: argparse.ArgumentParser, video_default: str) -> N
     anim.add_argument("--fps", type=float, default=30.0, help="frame rate (default 30)")
     anim.add_argument("--no-blink", action="store_true",
                       help="do not blink (default: about 17 blinks a minute, at word boundaries, the same every run)")
+    anim.add_argument("--articulation", type=float, default=1.0, metavar="A",
+                      help="0..2: how much the recording's loudness and formants (else the text's stress and "
+                      "*emphasis*) widen or narrow each phone's jaw and lips (JALI; default 1, 0 = the tabled visemes)")
+    anim.add_argument("--no-gestures", action="store_true",
+                      help="keep the head, brows and gaze still (default: nods on pitch accents, a head pose per "
+                      "phrase, brow raises, gaze saccades; the same every run)")
     anim.add_argument("--audio", type=Path, metavar="WAV",
                       help="a recording to mux into the MP4 (starts at t=0): plain text is aligned to it; the "
                       "face rests after the last phone until it ends")
@@ -87,10 +93,24 @@ def check_early(args, default_video: Path, inputs=(), recording: Path | None = N
         raise InputError("--save-transcript and another output are the same path", saved.path)
     physics = opt.physics_from_args(args)
     check_physics_outputs([s.name for s in sinks], physics)
+    from visemeface.speech.articulation import check_articulation
+
+    check_articulation(args.articulation)
     return sinks, render, physics, saved
 
 
-def animate_utterance(utterance, args, sinks, render, physics, audio=None, saved=None) -> int:
+def check_rig_and_emotions(args):
+    """The rig of ``--face``/``--landmarks``/``--rig`` with ``--emotion`` checked against its expressions
+    (before work that needs neither, such as synthesising and aligning speech)."""
+    from visemeface.animate import parse_emotions
+    from visemeface.postures.library import load_expressions
+
+    rig = opt.build_rig(args)
+    parse_emotions(args.emotion, load_expressions(rig=rig).index)
+    return rig
+
+
+def animate_utterance(utterance, args, sinks, render, physics, audio=None, saved=None, rig=None) -> int:
     """Utterance -> the sinks through :func:`visemeface.animate.animate`; prints a summary.
 
     ``audio`` (default ``--audio``) is the sound muxed into the video; ``saved`` the staged
@@ -104,11 +124,11 @@ def animate_utterance(utterance, args, sinks, render, physics, audio=None, saved
         if saved is not None:
             write_transcript(utterance, saved.open(), fmt=format_of(saved.path), force=True)
         stats = None if not sinks else animate(   # no sinks: only the timed phones (--no-video --save-transcript)
-            utterance, sinks, render, rig=opt.build_rig(args), emotions=args.emotion, interp=args.interp,
+            utterance, sinks, render, rig=opt.build_rig(args) if rig is None else rig, emotions=args.emotion, interp=args.interp,
             fps=args.fps, audio=args.audio if audio is None else audio, physics=args.physics,
             physics_settings=physics, checkpoint=lambda motion: opt.checkpoint_of(motion, sinks, args),
             resume=args.resume, show_progress=not args.quiet, source=str(getattr(args, "transcript", None) or "text"),
-            blink=not args.no_blink)
+            blink=not args.no_blink, articulation=args.articulation, gestures=not args.no_gestures)
     except BaseException:
         if saved is not None:
             saved.abort()
@@ -133,7 +153,7 @@ def register(subparsers) -> None:
         "Praat/MFA TextGrid, MFA JSON/CSV, DECtalk string, or plain English text) or a recording "
         "(its phones aligned to --text, else recognised; its sound muxed) and write an MP4 "
         "(TRANSCRIPT's stem + .mp4 in the current folder unless -o) and any exports.",
-        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+        epilog=EPILOG, formatter_class=opt.Help)
     p.add_argument("transcript", type=Path, metavar="TRANSCRIPT",
                    help="timed phoneme transcript, or a recording (WAV/FLAC/OGG/MP3, a video's sound)")
     src = p.add_argument_group("transcript")
@@ -196,7 +216,8 @@ def run(args) -> int:
     sinks, render, physics, saved = check_early(
         args, Path.cwd() / (args.transcript.stem + ".mp4"), inputs=[args.transcript],
         recording=args.transcript if is_recording(args.transcript) else None)
+    rig = check_rig_and_emotions(args) if is_recording(args.transcript) else None   # before the alignment
     utterance, recording = _read_input(args)
     with tempfile.TemporaryDirectory(prefix="visemeface-") as folder:
         sound = None if recording is None else media_wav(recording, folder)
-        return animate_utterance(utterance, args, sinks, render, physics, audio=sound, saved=saved)
+        return animate_utterance(utterance, args, sinks, render, physics, audio=sound, saved=saved, rig=rig)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from visemeface.commands._options import print_table
+from visemeface.commands._options import Help, print_table
 
 ORDER = 40
 
@@ -14,9 +14,9 @@ def register(subparsers) -> None:
         "visemes",
         help="list the 56 visemes (DECtalk symbol, class, notes)",
         description="List the 56 speech postures (visemes) of the shipped viseme table: DECtalk index "
-        "and symbol, articulatory class, the seed-002 perceptual class where it has one, and notes on "
+        "and symbol, articulatory class, the Edge & Maddock (2001) perceptual class where it has one, and notes on "
         "the lip shape.",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=Help,
         epilog="example:\n  visemeface visemes\n  visemeface visemes --csv > visemes.csv",
     )
     p.add_argument("--csv", action="store_true", help="print CSV instead of an aligned table")
@@ -25,7 +25,7 @@ def register(subparsers) -> None:
 
 
 def _perceptual_classes() -> dict[str, str]:
-    """DECtalk symbol -> seed 002 Table 2 class, e.g. ``"p" -> "a /p,b,m/"``."""
+    """DECtalk symbol -> Edge & Maddock (2001) Table 2 class, e.g. ``"p" -> "a /p,b,m/"``."""
     from visemeface.postures.phonemes import CLASSES, class_label
 
     return {s: f"{key} {class_label(key)}" for key, members in CLASSES.items() for s in members}
@@ -39,6 +39,6 @@ def run(args) -> int:
     rows = [(str(int(r["index"])), sym, r["class"], classes.get(sym, ""), r["notes"])
             for sym, r in info.iterrows()]
     head = ("index", "symbol", "class", "perceptual_class", "notes") if args.csv else \
-        ("#", "symbol", "class", "seed-002 class", "notes")
+        ("#", "symbol", "class", "Edge & Maddock class", "notes")
     print_table(head, rows, args.csv)
     return 0

@@ -18,8 +18,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from visemeface.errors import InputError
 from visemeface.export.sinks import Sink, register
-from visemeface.face.mesh import vertex_normals
+from visemeface.face.normals import vertex_normals
 from visemeface.muscles.morphs import JAW_SAMPLES, jaw_sample_weights, morph_weights, rig_morph_targets  # noqa: F401
 from visemeface.outputs import atomic_output
 
@@ -119,12 +120,35 @@ def _check_animation(n: int, tg: np.ndarray, target_names, t: np.ndarray, w: np.
         raise ValueError("morph targets and weights must be finite")
 
 
+def _animated_nodes(buf, name, t_in, w_out, n_keys: int, head):
+    """The nodes, animation channels and samplers: the mesh's morph weights and, with ``head`` (pivot, (F, 3)
+    degrees), a ``head`` node at the pivot, parent of the mesh, whose rotation is animated."""
+    nodes = [{"mesh": 0, "name": name}]
+    channels = [{"sampler": 0, "target": {"node": 0, "path": "weights"}}]
+    samplers = [{"input": t_in, "output": w_out, "interpolation": "LINEAR"}]
+    if head is None:
+        return nodes, channels, samplers
+    from visemeface.speech.gestures import head_quaternions
+
+    pivot, angles = head
+    angles = np.asarray(angles, dtype=np.float64).reshape(-1, 3)
+    if len(angles) != n_keys:
+        raise InputError(f"{len(angles)} head rotations for {n_keys} keyframes")
+    pivot = [float(c) for c in pivot]
+    nodes[0]["translation"] = [-c for c in pivot]
+    nodes.append({"name": "head", "translation": pivot, "children": [0]})
+    q_out = buf.add(head_quaternions(angles).astype("<f4"), "VEC4")
+    channels.append({"sampler": 1, "target": {"node": 1, "path": "rotation"}})
+    samplers.append({"input": t_in, "output": q_out, "interpolation": "LINEAR"})
+    return nodes, channels, samplers
+
+
 def write_morph_animation_glb(path, vertices: np.ndarray, triangles: np.ndarray,
                               targets: np.ndarray, target_names: Sequence[str],
                               times: np.ndarray, weights: np.ndarray,
                               colors: np.ndarray | None = None, normals: np.ndarray | None = None,
                               name: str = "face", extras: dict | None = None,
-                              force: bool = False) -> None:
+                              force: bool = False, head=None) -> None:
     r"""Write a mesh with morph targets and a morph-weight animation as binary glTF 2.0.
 
     The animated positions are
@@ -157,7 +181,7 @@ def write_morph_animation_glb(path, vertices: np.ndarray, triangles: np.ndarray,
         Display (sRGB) vertex colours (floats in 0..1 or uint8), exported as ``COLOR_0`` in the linear
         values glTF defines (:func:`srgb_to_linear`; alpha kept).
     normals : (N, 3), optional
-        Rest vertex normals (default: area-weighted, :func:`visemeface.face.mesh.vertex_normals`).
+        Rest vertex normals (default: area-weighted, :func:`visemeface.face.normals.vertex_normals`).
         Morph targets carry no normal deltas: viewers shade the moving face
         with the rest normals (a small shading error, no geometric one).
     extras : dict, optional
@@ -165,6 +189,9 @@ def write_morph_animation_glb(path, vertices: np.ndarray, triangles: np.ndarray,
         scene's and animation's ``extras`` (Blender keeps the scene's as custom properties).
     force : bool
         Replace an existing file.
+    head : (pivot, (F, 3) degrees), optional
+        The head's rotation per keyframe (yaw, pitch, roll, :mod:`visemeface.speech.gestures`): the mesh
+        node is then the child of a ``head`` node at ``pivot`` whose rotation is animated.
     """
     x = np.asarray(vertices, dtype=np.float64)
     tri = np.asarray(triangles, dtype=np.int64)
@@ -193,11 +220,12 @@ def write_morph_animation_glb(path, vertices: np.ndarray, triangles: np.ndarray,
     from visemeface import __version__
 
     extras = dict(extras or {})
+    nodes, channels, samplers = _animated_nodes(buf, name, t_in, w_out, len(t), head)
     gltf = {
         "asset": {"version": "2.0", "generator": f"visemeface {__version__}", **({"extras": extras} if extras else {})},
         "scene": 0,
-        "scenes": [{"nodes": [0], **({"extras": extras} if extras else {})}],
-        "nodes": [{"mesh": 0, "name": name}],
+        "scenes": [{"nodes": [len(nodes) - 1], **({"extras": extras} if extras else {})}],
+        "nodes": nodes,
         "materials": [{"name": "skin", "pbrMetallicRoughness": {
             "baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0,
             "roughnessFactor": 0.7}}],
@@ -205,9 +233,8 @@ def write_morph_animation_glb(path, vertices: np.ndarray, triangles: np.ndarray,
             "attributes": attrs, "indices": indices, "material": 0, "mode": 4,
             "targets": target_refs}],
             "weights": [0.0] * k, "extras": {"targetNames": list(map(str, target_names))}}],
-        "animations": [{"name": "speech", **({"extras": extras} if extras else {}), "channels": [
-            {"sampler": 0, "target": {"node": 0, "path": "weights"}}],
-            "samplers": [{"input": t_in, "output": w_out, "interpolation": "LINEAR"}]}],
+        "animations": [{"name": "speech", **({"extras": extras} if extras else {}), "channels": channels,
+                        "samplers": samplers}],
         "buffers": [{"byteLength": buf.offset}],
         "bufferViews": buf.views,
         "accessors": buf.accessors,
@@ -218,13 +245,13 @@ def write_morph_animation_glb(path, vertices: np.ndarray, triangles: np.ndarray,
 
 
 def write_rig_animation(path, rig, activations: np.ndarray, times: np.ndarray, force: bool = False,
-                        jaw_samples: int = JAW_SAMPLES, extras: dict | None = None) -> None:
+                        jaw_samples: int = JAW_SAMPLES, extras: dict | None = None, head=None) -> None:
     """Write the rig's face with its morph targets and activations (F, M) at ``times`` as a .glb."""
     targets, names, samples = rig_morph_targets(rig, jaw_samples)
     face = rig.face
     write_morph_animation_glb(path, face.vertices, face.triangles, targets, names, times,
                               morph_weights(activations, rig, samples), colors=face.vertex_colors(),
-                              normals=face.vertex_normals(), extras=extras, force=force)
+                              normals=face.vertex_normals(), extras=extras, force=force, head=head)
 
 
 #: ``--gltf-shapes`` choices: the rig's own functions, or a retargeting vocabulary fitted per frame.
@@ -292,14 +319,24 @@ def write_run_glb(path, run, shapes: str = "muscles", fitted=None) -> None:
     else:
         vocab, times, w = fitted
     held = run.end_time is not None and run.end_time > times[-1] + 1e-6
+    head = run.extra.get("head")
+    if head is not None:
+        from visemeface.speech.gestures import head_pivot
+
+        angles = np.asarray(head, dtype=np.float64).reshape(-1, 3)
+        angles = np.vstack([angles, np.repeat(angles[-1:], max(0, len(times) - len(angles)), axis=0)])[:len(times)]
     if held:
         times = np.append(times, run.end_time)
         w = np.vstack([w, w[-1:]])
+        if head is not None:
+            angles = np.vstack([angles, angles[-1:]])
+    head = None if head is None else (head_pivot(run.face.vertices), angles)
     extras = {"fps": run.fps, "frames": run.n_frames, "keyframes": len(times), "heldLastKey": bool(held),
               "shapes": shapes, "source": str(run.extra.get("source", "")), "interp": str(run.extra.get("interp", ""))}
     if shapes == "muscles":
-        write_rig_animation(path, run.rig, w, times, force=True, extras=extras)
+        write_rig_animation(path, run.rig, w, times, force=True, extras=extras, head=head)
         return
     face = run.face
     write_morph_animation_glb(path, face.vertices, face.triangles, vocab.shapes, vocab.names, times, w,
-                              colors=face.vertex_colors(), normals=face.vertex_normals(), extras=extras, force=True)
+                              colors=face.vertex_colors(), normals=face.vertex_normals(), extras=extras, force=True,
+                              head=head)

@@ -115,7 +115,7 @@ class ObjSink(Sink):
         (self.tmp[0] / MTL_NAME).write_text(mtl_text(names, palette))
 
     def write(self, frame) -> None:
-        from visemeface.face.mesh import vertex_normals
+        from visemeface.face.normals import vertex_normals
         from visemeface.export.gltf import unit_normals
 
         v = np.asarray(frame.vertices, dtype=np.float64)

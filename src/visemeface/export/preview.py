@@ -203,8 +203,8 @@ class PreviewSink(Sink):
 
     name = "preview"
     metavar = "FILE.html"
-    help = ("also write a self-contained web page (three.js, offline) that plays the animation with --audio "
-            "(no FILE: beside the MP4)")
+    help = ("also write a self-contained web page (three.js, offline) that plays the animation, with its sound "
+            "where the run has one (no FILE: beside the video, named after it)")
     suffixes = (".html",)
     beside_video = ".html"
 

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import csv
 import json
+from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 
@@ -18,9 +20,21 @@ from visemeface.errors import InputError
 from visemeface.export.sinks import Sink, register
 from visemeface.outputs import atomic_output
 
-#: Live Link Face's columns after the 52 blendshapes: head and eye rotations (written as 0).
+#: Live Link Face's columns after the 52 blendshapes: head and eye rotations (the head's from the run's
+#: gestures, the eyes' 0).
 LIVE_LINK_ROTATIONS = ("HeadYaw", "HeadPitch", "HeadRoll", "LeftEyeYaw", "LeftEyePitch", "LeftEyeRoll",
                        "RightEyeYaw", "RightEyePitch", "RightEyeRoll")
+#: Degrees of head rotation per unit of Live Link Face's HeadYaw/HeadPitch/HeadRoll (the app writes them
+#: normalised, 1 = a quarter turn).
+LIVE_LINK_HEAD_DEG = 90.0
+
+
+def live_link_head(head, n: int) -> np.ndarray:
+    """(n, 3) HeadYaw, HeadPitch, HeadRoll values of per-frame (yaw, pitch, roll) degrees (zeros for None)."""
+    if head is None:
+        return np.zeros((n, 3))
+    h = np.asarray(head, dtype=np.float64).reshape(-1, 3)[:n] / LIVE_LINK_HEAD_DEG
+    return np.vstack([h, np.repeat(h[-1:] if len(h) else np.zeros((1, 3)), n - len(h), axis=0)])
 
 
 def live_link_timecode(t: float, fps: float) -> str:
@@ -50,22 +64,26 @@ def write_weights(path, vocabulary: str, names, times, weights, fps: float, forc
                 out.writerow([i, f"{ti:.6f}", *(f"{x:.6f}" for x in row)])
 
 
-def write_live_link(path, names, times, weights, fps: float, force: bool = False) -> None:
+def write_live_link(path, names, times, weights, fps: float, force: bool = False, head=None) -> None:
     """ARKit weights as a Live Link Face CSV: ``Timecode,BlendShapeCount,EyeBlinkLeft,…,RightEyeRoll``.
 
     ``names`` are the 52 camelCase ARKit names in Live Link's column order; blendshape columns are
-    PascalCase; head and eye rotations are 0; ``BlendShapeCount`` is the number of value columns (61).
+    PascalCase; the head's rotation is ``head`` ((F, 3) yaw, pitch, roll degrees, :func:`live_link_head`), 0
+    without it, and the eyes' 0; ``BlendShapeCount`` is the number of value columns (61).
     """
     from visemeface.retarget import live_link_name
 
     w = np.clip(np.asarray(weights, dtype=np.float64), 0.0, 1.0)
     cols = [live_link_name(n) for n in names] + list(LIVE_LINK_ROTATIONS)
-    zeros = ["0"] * len(LIVE_LINK_ROTATIONS)
+    zeros = ["0"] * (len(LIVE_LINK_ROTATIONS) - 3)
+    rot = live_link_head(head, len(w))
     with atomic_output(path, force) as tmp, open(tmp, "w", newline="", encoding="utf-8") as fh:
         out = csv.writer(fh, lineterminator="\n")
         out.writerow(["Timecode", "BlendShapeCount", *cols])
-        for ti, row in zip(times, w):
-            out.writerow([live_link_timecode(float(ti), fps), len(cols), *(f"{x:.6f}" for x in row), *zeros])
+        for ti, row, hr in zip(times, w, rot):
+            head_cols = [f"{x:.6f}" if x else "0" for x in hr]
+            out.writerow([live_link_timecode(float(ti), fps), len(cols), *(f"{x:.6f}" for x in row), *head_cols,
+                          *zeros])
 
 
 class FitSink(Sink):
@@ -73,6 +91,11 @@ class FitSink(Sink):
 
     vocabulary = ""
     suffixes = (".csv", ".json")
+    #: Whether the speech's prosodic gestures (brow raises, gaze) are fitted with the rest of the pose. A
+    #: vocabulary with no brow raise of its own (VRM's presets) sets False: fitted, the raises read as
+    #: 'surprised' (0.4 on "set white with p two soon") and its open jaw took 'aa' from 0.25 to 0.04, so its
+    #: expressions are fitted to the pose without them (the emotions and blinks stay).
+    fits_gestures: ClassVar[bool] = True
 
     def open(self, run) -> None:
         from visemeface.retarget import ShapeFit, moving_vertices, vocabulary
@@ -84,9 +107,15 @@ class FitSink(Sink):
         self.fit = ShapeFit(self.vocab, moving_vertices(run.rig))
         self.rest = np.asarray(run.face.vertices, dtype=np.float64)
         self.times, self.weights, self.residuals = [], [], []
+        plain = None if self.fits_gestures else run.extra.get("track_without_gestures")
+        self.plain = None if plain is None else run.rig.clamp(run.rig.track_matrix(plain))
 
     def write(self, frame) -> None:
-        w, r = self.fit.frame(np.asarray(frame.vertices, dtype=np.float64) - self.rest)
+        if self.plain is not None:      # the pose without the prosodic gestures (see fits_gestures)
+            d = self.run.rig.displacement(self.plain[min(frame.index, len(self.plain) - 1)])
+        else:
+            d = np.asarray(frame.vertices, dtype=np.float64) - self.rest
+        w, r = self.fit.frame(d)
         self.times.append(frame.time)
         self.weights.append(w)
         self.residuals.append(r)
@@ -99,28 +128,90 @@ class FitSink(Sink):
                       self.run.fps, force=True)
 
 
+class RigFitSink(FitSink):
+    """Base of the ARKit sinks: the weights of a blendshape rig made to ARKit's definitions
+    (:mod:`visemeface.retarget.rigs`).
+
+    Our muscles pose the rig's neutral with the run's activations (the drive track of a simulation, so the
+    lips' sticking is not in the weights) and each frame is fitted onto the rig's own shapes, ``mouthClose``
+    never above ``jawOpen``. Without ``--arkit-rig``/``--livelink-rig`` the rig is the ICT Face Model's 53
+    artist-made shapes, so the weights mean on any ARKit character what they mean in ARKit; with a rig of the
+    user's, its shapes are fitted and written under ARKit's names (its own names for shapes ARKit lacks).
+    """
+
+    vocabulary = "arkit"
+    rig_setting = ""
+
+    def open(self, run) -> None:
+        import warnings
+
+        from visemeface.retarget.rigs import load_client_rig, reference_rig
+
+        Sink.open(self, run)
+        if run.rig is None or run.track is None:
+            raise InputError(f"--{self.name} needs a run with an activation track (speak, say, batch or simulate)",
+                             self.path)
+        given = self.settings.get(self.rig_setting)
+        client = load_client_rig(given) if given else reference_rig()
+        names, M, missing = client.arkit_map()
+        if given and missing:
+            warnings.warn(f"{given}: the rig has no shape for {len(missing)} of ARKit's 52 "
+                          f"({', '.join(missing[:8])}{' ...' if len(missing) > 8 else ''}); written as 0",
+                          stacklevel=2)
+        W, self.residuals = client.track_weights(run.rig.track_matrix(run.track), run.rig.path)
+        extra = client.extra_shapes() if given else []
+        self.names = list(names) + [client.shapes.names[j] for j in extra]
+        self.values = np.hstack([W @ M.T, W[:, extra]])
+        self.client = client
+        self.times, self.rows = [], []
+
+    def write(self, frame) -> None:
+        self.times.append(frame.time)
+        self.rows.append(min(frame.index, len(self.values) - 1))
+
+    def weight_matrix(self) -> np.ndarray:
+        return self.values[self.rows].reshape(len(self.rows), len(self.names))
+
+    def close(self) -> None:
+        write_weights(self.tmp[0], self.vocabulary, self.names, self.times, self.weight_matrix(), self.run.fps,
+                      force=True)
+
+
+_RIG_HELP = ("the character's blendshape rig the ARKit weights are fitted onto: a .glb/.gltf with morph targets "
+             "or a folder of OBJ shapes with a *neutral*.obj, with a <name>.landmarks.json beside it (a mesh in "
+             "the ICT Face Model's topology needs none); default: the ICT Face Model's 53 shapes")
+
+
 @register
-class ArkitSink(FitSink):
-    """ARKit's 52 blendshape weights per frame (camelCase names)."""
+class ArkitSink(RigFitSink):
+    """ARKit's 52 blendshape weights per frame (camelCase names), with ARKit's meaning (:class:`RigFitSink`)."""
 
     name = "arkit"
-    vocabulary = "arkit"
     metavar = "FILE.csv|.json"
-    help = "also write ARKit's 52 blendshape weights per frame (CSV or JSON by the suffix)"
+    help = ("also write ARKit's 52 blendshape weights per frame (CSV or JSON by the suffix), fitted on an ARKit "
+            "rig (--arkit-rig)")
+    rig_setting = "arkit_rig"
+    arguments = ((("--arkit-rig",), dict(dest="arkit_rig", metavar="RIG", type=Path, help=_RIG_HELP)),)
 
 
 @register
-class LiveLinkSink(FitSink):
+class LiveLinkSink(RigFitSink):
     """ARKit weights in Live Link Face's CSV layout (Unreal's Live Link Face app, MetaHumans)."""
 
     name = "livelink"
-    vocabulary = "arkit"
     metavar = "FILE.csv"
-    help = "also write ARKit weights as a Live Link Face CSV (Timecode, BlendShapeCount, EyeBlinkLeft, ...)"
+    help = ("also write ARKit weights as a Live Link Face CSV (Timecode, BlendShapeCount, EyeBlinkLeft, ...), "
+            "fitted on an ARKit rig (--livelink-rig)")
     suffixes = (".csv",)
+    rig_setting = "livelink_rig"
+    arguments = ((("--livelink-rig",), dict(dest="livelink_rig", metavar="RIG", type=Path, help=_RIG_HELP)),)
 
     def close(self) -> None:
-        write_live_link(self.tmp[0], self.vocab.names, self.times, self.weight_matrix(), self.run.fps, force=True)
+        from visemeface.retarget.rigs import arkit_names
+
+        names = arkit_names()
+        write_live_link(self.tmp[0], names, self.times, self.weight_matrix()[:, : len(names)], self.run.fps,
+                        force=True, head=self.run.extra.get("head"))
 
 
 @register
@@ -131,6 +222,8 @@ class VrmSink(FitSink):
     vocabulary = "vrm"
     metavar = "FILE.csv|.json"
     help = "also write VRM expression weights per frame (aa ih ou ee oh, blink, happy, ...; CSV or JSON)"
+
+    fits_gestures = False
 
 
 @register

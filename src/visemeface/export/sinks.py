@@ -202,6 +202,9 @@ def sinks_from_args(args, force: bool, skip: tuple[str, ...] = (), video: Path |
             continue
         path = getattr(args, dest_of(cls), None)
         if path == BESIDE_VIDEO:
+            if video is None:
+                raise InputError(f"{option_of(cls)} without a path writes beside the MP4, and no MP4 is written "
+                                 f"(--no-video): give its path, e.g. {option_of(cls)} take{cls.beside_video}")
             path = Path(video).with_suffix(cls.beside_video)
         own = {kw["dest"]: getattr(args, kw["dest"], kw.get("default")) for _, kw in cls.arguments}
         if path is not None:

@@ -111,12 +111,28 @@ class VideoWriter:
             if exc_type is None:
                 gen.close()  # flushes and waits for ffmpeg to finish the file
             else:
-                with contextlib.suppress(Exception):
+                # stopped (an error, Ctrl-C) before the first frame: imageio-ffmpeg logs that the file it was
+                # writing is invalid, a second line after ours; the file is a temporary, removed below
+                with contextlib.suppress(Exception), _quiet("imageio_ffmpeg"):
                     gen.close()
         except BaseException as err:
             stack.__exit__(type(err), err, err.__traceback__)
             raise
         return stack.__exit__(exc_type, exc, tb)
+
+
+@contextlib.contextmanager
+def _quiet(logger: str):
+    """``logger``'s warnings held back for the block."""
+    import logging
+
+    log = logging.getLogger(logger)
+    level = log.level
+    log.setLevel(logging.ERROR)
+    try:
+        yield
+    finally:
+        log.setLevel(level)
 
 
 def read_video_info(path) -> dict:

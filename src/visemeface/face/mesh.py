@@ -29,7 +29,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import scipy.sparse
 
 from visemeface.errors import InputError
 from visemeface.outputs import atomic_output
@@ -56,6 +55,7 @@ MESH_SUFFIXES = (".obj", ".ply", ".glb", ".gltf")
 
 
 from visemeface.sidecars import landmarks_sidecar as sidecar_path  # noqa: E402  (the one rule, re-exported)
+from visemeface.face.normals import NormalAccumulator, unit_rows  # noqa: E402
 
 
 def split_quads(quads: np.ndarray) -> np.ndarray:
@@ -69,66 +69,6 @@ def split_quads(quads: np.ndarray) -> np.ndarray:
     tris[0::2] = quads[:, [0, 1, 2]]
     tris[1::2] = quads[:, [0, 2, 3]]
     return tris
-
-
-class NormalAccumulator:
-    r"""Per-vertex normals for a fixed topology, fast enough for every frame.
-
-    The vertex normal is the normalised sum of the area-weighted normals of the
-    triangles around it,
-
-    .. math:: n_i = \frac{\sum_{t \ni i} (b_t - a_t) \times (c_t - a_t)}
-                         {\lVert \sum_{t \ni i} (b_t - a_t) \times (c_t - a_t) \rVert},
-
-    computed as one sparse product ``S @ N_faces`` with the vertex-triangle
-    incidence matrix ``S`` built once. With ``groups`` (an int per vertex; a
-    triangle belongs to the largest group among its vertices) a vertex sums
-    only the triangles of its own group, when it has any.
-    """
-
-    def __init__(self, triangles: np.ndarray, n_vertices: int, groups: np.ndarray | None = None):
-        self.triangles = np.ascontiguousarray(triangles, dtype=np.int64)
-        t = len(self.triangles)
-        rows = self.triangles.ravel()
-        cols = np.repeat(np.arange(t), 3)
-        weight = np.ones(3 * t)
-        if groups is not None:
-            # smoothing groups: a vertex averages only the triangles of its own group
-            # (when it has any), so e.g. the dark mouth cavity does not bend the normals
-            # of the lip seam it hangs from.
-            groups = np.asarray(groups)
-            tri_group = groups[self.triangles].max(axis=1)
-            same = groups[rows] == np.repeat(tri_group, 3)
-            has_own = np.bincount(rows[same], minlength=n_vertices) > 0
-            weight = np.where(same | ~has_own[rows], 1.0, 0.0)
-        self._incidence = scipy.sparse.csr_matrix((weight, (rows, cols)), shape=(n_vertices, t))
-        self._incidence32 = self._incidence.astype(np.float32)
-        self._a, self._b, self._c = (np.ascontiguousarray(self.triangles[:, k]) for k in range(3))
-
-    def __call__(self, vertices: np.ndarray, dtype=np.float64) -> np.ndarray:
-        """Unit normals (N, 3) of ``vertices``; ``dtype=np.float32`` is faster (per-frame rendering)."""
-        v = np.asarray(vertices, dtype=dtype)
-        p0 = v[self._a]
-        e1 = v[self._b] - p0
-        e2 = v[self._c] - p0
-        f = np.empty_like(e1)          # e1 x e2, written out: np.cross is slower on many rows
-        f[:, 0] = e1[:, 1] * e2[:, 2] - e1[:, 2] * e2[:, 1]
-        f[:, 1] = e1[:, 2] * e2[:, 0] - e1[:, 0] * e2[:, 2]
-        f[:, 2] = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
-        s = self._incidence32 if v.dtype == np.float32 else self._incidence
-        return unit_rows(s @ f)
-
-
-def unit_rows(n: np.ndarray) -> np.ndarray:
-    """Each row of ``n`` scaled to unit length (zero rows kept)."""
-    length = np.sqrt(np.einsum("ij,ij->i", n, n))
-    length[length == 0] = 1.0
-    return n / length[:, None]
-
-
-def vertex_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """Unit area-weighted vertex normals (see :class:`NormalAccumulator`)."""
-    return NormalAccumulator(triangles, len(vertices))(vertices)
 
 
 @dataclass
@@ -163,6 +103,9 @@ class FaceMesh:
     #: ``(P, parent)``, its normals those of its first N vertices on ``parent``'s triangles, interpolated by
     #: the sparse (N', N) ``P`` that made its vertices (see :meth:`normal_accumulator`); None: its own.
     shading_parent: tuple | None = field(default=None, repr=False, compare=False)
+    #: Rig-file values this face needs where the rig file leaves them out, ``{table: {key: value}}``: a
+    #: scanned head with a neck sets ``{"jaw": {"neck_fade_deg": ...}}`` (:func:`visemeface.face.ict.ict_face`).
+    rig_defaults: dict = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self):
         self.vertices = np.ascontiguousarray(self.vertices, dtype=np.float64).reshape(-1, 3)
@@ -334,6 +277,11 @@ def _obj_text(path: Path) -> str:
     return text
 
 
+#: Largest vertex coordinate a face mesh may have, in its own unit: a face in metres, millimetres or even
+#: micrometres is far below it, and squared distances of such coordinates stay finite (1e308 overflowed them).
+MAX_COORDINATE = 1e9
+
+
 def _read_surface(path: Path):
     """(vertices, triangles, colours or None) from a mesh file via trimesh."""
     import trimesh
@@ -361,14 +309,18 @@ def _read_surface(path: Path):
         raise InputError(f"cannot read mesh: {msg}", path) from None
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.vertices) == 0 or len(loaded.faces) == 0:
         raise InputError("cannot read mesh: no vertices or faces", path)
+    vertices = np.asarray(loaded.vertices, dtype=np.float64)
+    if not np.all(np.isfinite(vertices)) or np.abs(vertices).max() > MAX_COORDINATE:
+        bad = int(np.argmax(~np.isfinite(vertices).all(axis=1) | (np.abs(vertices) > MAX_COORDINATE).any(axis=1)))
+        raise InputError(f"vertex {bad}: coordinates must be finite and at most {MAX_COORDINATE:g} in size, got "
+                         f"{vertices[bad].tolist()}", path)
     colours = None
     try:
         if loaded.visual.kind == "vertex":
             colours = np.asarray(loaded.visual.vertex_colors, dtype=np.float64)[:, :3] / 255.0
     except Exception:
         colours = None
-    return (np.asarray(loaded.vertices, dtype=np.float64),
-            np.asarray(loaded.faces, dtype=np.int64), colours)
+    return vertices, np.asarray(loaded.faces, dtype=np.int64), colours
 
 
 def _read_sidecar(path: Path, vertices: np.ndarray) -> tuple[dict, dict, np.ndarray | None]:
@@ -379,10 +331,9 @@ def _read_sidecar(path: Path, vertices: np.ndarray) -> tuple[dict, dict, np.ndar
         text = path.read_text(encoding="utf-8", errors="replace")
     except OSError as exc:
         raise InputError(f"cannot read: {exc.strerror}", path) from None
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InputError(f"not valid JSON: {exc.msg} (column {exc.colno})", path, exc.lineno) from None
+    from visemeface.textfile import parse_json
+
+    data = parse_json(text, path)
     if not isinstance(data, dict) or "landmarks" not in data:
         raise InputError("expected a JSON object with a 'landmarks' entry", path)
     n = len(vertices)
@@ -400,8 +351,14 @@ def _read_sidecar(path: Path, vertices: np.ndarray) -> tuple[dict, dict, np.ndar
             landmarks[name] = value
         elif (isinstance(value, list) and len(value) == 3
               and all(isinstance(c, (int, float)) and not isinstance(c, bool) for c in value)
-              and np.all(np.isfinite(value))):
-            landmarks[name] = int(np.argmin(np.sum((vertices - np.asarray(value, float)) ** 2, axis=1)))
+              and np.all(np.isfinite(np.asarray(value, float)))):
+            point = np.asarray(value, float)
+            low, high = vertices.min(axis=0), vertices.max(axis=0)
+            reach = high - low                   # a point beyond the mesh's box by more than its size is no landmark
+            if np.any(point < low - reach) or np.any(point > high + reach):
+                raise InputError(f"landmark {name!r}: {value} lies far outside the mesh (which spans "
+                                 f"{', '.join(f'{a:.4g}..{b:.4g}' for a, b in zip(low, high))})", path)
+            landmarks[name] = int(np.argmin(np.sum((vertices - point) ** 2, axis=1)))
         else:
             raise InputError(f"landmark {name!r}: expected a vertex index or [x, y, z], got {value!r}", path)
     regions = {}
@@ -411,6 +368,8 @@ def _read_sidecar(path: Path, vertices: np.ndarray) -> tuple[dict, dict, np.ndar
     for name, idx in regions_in.items():
         try:
             arr = np.asarray(idx, dtype=np.int64).reshape(-1)
+        except OverflowError:
+            raise InputError(f"region {name!r}: vertex index out of range (mesh has {n} vertices)", path) from None
         except (TypeError, ValueError):
             raise InputError(f"region {name!r}: expected a list of vertex indices", path) from None
         if arr.size and (arr.min() < 0 or arr.max() >= n):
@@ -420,6 +379,8 @@ def _read_sidecar(path: Path, vertices: np.ndarray) -> tuple[dict, dict, np.ndar
     if "quads" in data:
         try:
             quads = np.asarray(data["quads"], dtype=np.int64).reshape(-1, 4)
+        except OverflowError:
+            raise InputError(f"'quads': vertex index out of range (mesh has {n} vertices)", path) from None
         except (TypeError, ValueError):
             raise InputError("'quads' must be a list of [a, b, c, d] vertex indices", path) from None
         if quads.size and (quads.min() < 0 or quads.max() >= n):

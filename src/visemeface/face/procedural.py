@@ -51,10 +51,10 @@ import numpy as np
 
 from visemeface.errors import InputError
 from visemeface.face import mouth
-from visemeface.face.colouring import skin_colours
+from visemeface.face.colouring import skin_colours, skin_tone
 from visemeface.face.eyes import _eyeball
 from visemeface.face.mesh import FaceMesh
-from visemeface.face.shape import (_BAND_MIN, _BAND_ROWS, _EYE_HALF_W, _EYE_X, _EYE_Y, _L0, _SEAM_KNOT, _U0,
+from visemeface.face.shape import (_BAND_MIN, _BAND_ROWS, _EYE_HALF_W, _EYE_X, _EYE_Y, _IRIS_R, _L0, _SEAM_KNOT, _U0,
                                    _X_END, _XC, _Y_SUBNASALE, _Y_TOP, DEFAULT_RESOLUTION, MOUTH_WIDTH, _knots,
                                    _relief, _wrap)
 from visemeface.numeric import smoothstep as _smoothstep
@@ -140,7 +140,7 @@ class _Grid:
 
 def _rows(X, counts):
     """Row heights (nr, nc) and canonical heights (nr,) from the feature curves."""
-    lid_band = 0.5 * ((_EYE_Y - _Y_SUBNASALE) / counts[4] + (_Y_TOP - _EYE_Y) / counts[6])
+    lid_band = 0.5 * ((_EYE_Y - _Y_SUBNASALE) / counts[4] + (_Y_TOP - _EYE_Y) / (counts[7] + 1))
     knots = _knots(X, lid_band)
     knots0 = _knots(np.zeros(1), lid_band)
     rows_y, rows_yc = [], []
@@ -230,7 +230,7 @@ def _eyes(g: _Grid, V: np.ndarray, segments: int):
         zl = centre[2] + axes[2] * np.sqrt(np.clip(1 - rr ** 2, 0, None))
         V[near, 2] = (1 - w[near]) * V[near, 2] + w[near] * np.maximum(zl[near], V[near, 2] - 0.004)
         t = 0.0012                                # lid thickness over the eyeball
-        part = _eyeball(centre, (axes[0] - t, axes[1] - t, axes[2] - t), segments, 0.0058, 0.0022, start)
+        part = _eyeball(centre, (axes[0] - t, axes[1] - t, axes[2] - t), segments, _IRIS_R, 0.0022, start)
         parts.append(part)
         start += len(part[0])
     return parts
@@ -353,7 +353,7 @@ def _landmarks(g: _Grid, V: np.ndarray, eye_sets, parts) -> dict:
     }
 
 
-def default_face(resolution: int | None = None, rest_gap: float = 0.0) -> FaceMesh:
+def default_face(resolution: int | None = None, rest_gap: float = 0.0, skin: str | None = None) -> FaceMesh:
     """Build the embedded default face.
 
     Parameters
@@ -365,6 +365,10 @@ def default_face(resolution: int | None = None, rest_gap: float = 0.0) -> FaceMe
     rest_gap : float
         Opening between the lips at the centre of the mouth at rest (m), 0 to
         0.01; tapers to 0 at the corners.
+    skin : str, optional
+        Skin-tone preset of the skin and lip colours (``data/face/skin_tones.toml``: Fitzpatrick
+        types ``"I"`` to ``"VI"``, light to dark; default ``"III"``, the original colours). Only
+        colours change.
 
     Returns
     -------
@@ -383,6 +387,7 @@ def default_face(resolution: int | None = None, rest_gap: float = 0.0) -> FaceMe
         raise InputError(f"resolution must be an integer from 800 to 200000, got {resolution!r}")
     if not 0.0 <= float(rest_gap) <= 0.01:
         raise InputError(f"rest_gap must be between 0 and 0.01 m, got {rest_gap!r}")
+    skin_tone(skin)                     # an unknown preset is refused before any work
     jc, n_half, counts, n_cav, segments = _layout(_scale_for(resolution))
     g = _grid(jc, n_half, counts, rest_gap)
     V = _wrap(g.Xv, g.Yv, g.h)
@@ -392,9 +397,10 @@ def default_face(resolution: int | None = None, rest_gap: float = 0.0) -> FaceMe
     for p in eye_parts:
         eye_sets.append(np.arange(start, start + len(p[0])))
         start += len(p[0])
-    upper_margin = np.zeros(g.n, bool)
-    upper_margin[g.idx_up[g.jlid + 1]] = True
-    colours = np.concatenate([skin_colours(g.Xv, g.Yv, g.Ycv, upper_margin)] + [p[3] for p in eye_parts])
+    margins = np.zeros((3, g.n), bool)          # the lower lid margin, the upper one, the lash ledge above it
+    for k in range(3):
+        margins[k, g.idx_up[g.jlid + k]] = True
+    colours = np.concatenate([skin_colours(g.Xv, g.Yv, g.Ycv, margins, skin)] + [p[3] for p in eye_parts])
     # the inner lip line: a darker vermilion along the seam (shows as the closed-lip line)
     for seam in (g.idx_up[g.js, g.icr + 1:g.icl], g.idx_lo[g.js, g.icr + 1:g.icl]):
         colours[seam] *= 0.62

@@ -1,6 +1,6 @@
 """Refine a face's quads along the lip seam, conformingly (no hanging nodes).
 
-The saliva film parts one seam element at a time (issue 16): on the default face
+The saliva film parts one seam element at a time: on the default face
 12 tissue elements span the mouth, so the film's 48 slabs cannot part separately
 inside one of them. :func:`refine_lip_seam` splits every lip-seam edge into ``r``
 equal parts, and with it every edge across from it: the split runs along the seam

@@ -25,11 +25,12 @@ _Y_SUBNASALE = 0.0185
 _EYE_X, _EYE_Y = 0.0322, 0.066  # eye centre
 _EYE_HALF_W = 0.0135            # half the palpebral fissure width
 _LID_GAP = 0.0008               # lid band height outside the eye opening
+_IRIS_R = 0.0058                # iris radius (before the final scaling to MOUTH_WIDTH, about x1.025)
 _L0, _U0 = 0.0105, 0.0082       # lower / upper vermilion heights at the centre
 
 _SKIN = np.array([0.87, 0.67, 0.56])
 _LIP = np.array([0.78, 0.40, 0.41])
-_BROW = np.array([0.36, 0.25, 0.19])
+_BROW = np.array([0.30, 0.21, 0.16])
 _NOSTRIL = np.array([0.30, 0.17, 0.15])
 _HAIR = np.array([0.20, 0.135, 0.095])
 _SCLERA = np.array([0.93, 0.91, 0.87])
@@ -69,9 +70,13 @@ def _eye_opening(X, band=0.003):
     """
     ax = np.abs(X)
     t = np.clip((ax - (_EYE_X - _EYE_HALF_W)) / (2 * _EYE_HALF_W), 0, 1)
-    lower = 0.0043 * np.sin(np.pi * t) ** 0.9
+    # At rest the upper lid margin covers the top 1.5 mm of the iris (radius 5.8 mm here, 5.95 mm
+    # once scaled) and the lower lid lies at the iris' lower edge, a fissure of about 10 mm: an
+    # adult's (Farkas 1994: palpebral fissure 8-11 mm high, 27-31 mm wide; upper lid 1-2 mm over
+    # the limbus, the lower at it). Higher margins show sclera above the iris, the stare of AU5.
+    lower = (_IRIS_R - 0.0001 - _LID_GAP / 2) * np.sin(np.pi * t) ** 0.9
     # the upper lid peaks a little medially of centre
-    upper = 0.0049 * np.sin(np.pi * t ** 0.85) ** 0.8
+    upper = (_IRIS_R - 0.0015 - _LID_GAP / 2) * np.sin(np.pi * t ** 0.85) ** 0.8
     outside = np.clip(np.abs(ax - _EYE_X) - _EYE_HALF_W, 0, None)
     part = 0.5 * (band - _LID_GAP) * _smoothstep(outside / 0.008)
     return -(_LID_GAP / 2 + lower + part), _LID_GAP / 2 + upper + part
@@ -82,6 +87,11 @@ def _knots(X, lid_band=0.003):
     X = np.asarray(X, dtype=float)
     lo, up = _eye_opening(X, lid_band)
     one = np.ones_like(X)
+    # the upper lid's margin is a ledge about 1.2 mm deep with the lashes on it (one row above the
+    # margin, so the lash line is a sharp dark band, not a shadow fading over a whole row);
+    # outside the eye the row parts to an ordinary spacing
+    outside = np.clip(np.abs(np.abs(X) - _EYE_X) - _EYE_HALF_W, 0, None)
+    lash = _LASH + (lid_band - _LASH) * _smoothstep(outside / 0.008)
     return [
         _Y_BOTTOM * one,
         -_lower_border(X),
@@ -90,13 +100,15 @@ def _knots(X, lid_band=0.003):
         _Y_SUBNASALE * one,
         _EYE_Y + lo,
         _EYE_Y + up,
+        _EYE_Y + up + lash,
         _Y_TOP * one,
     ]
 
 
 #: Rows per band at resolution scale 1 (bands between consecutive knots).
-_BAND_ROWS = (16, 4, 4, 4, 16, 1, 26)
-_BAND_MIN = (6, 2, 2, 2, 6, 1, 8)
+_BAND_ROWS = (16, 4, 4, 4, 16, 1, 1, 25)
+_BAND_MIN = (6, 2, 2, 2, 6, 1, 1, 7)
+_LASH = 0.0012                  # height of the upper lid's lash ledge
 _SEAM_KNOT = 2
 
 

@@ -1,4 +1,4 @@
-"""Waters muscle rig (seed 002 §2.1): 25 muscles and the jaw on any face mesh.
+"""Waters muscle rig (Edge & Maddock 2001, §2.1): 25 muscles and the jaw on any face mesh.
 
 - :mod:`~visemeface.muscles.functions`: linear and sphincter muscle fields, lip
   trimming, jaw rotation (pure numpy, formulas in the docstrings);

@@ -3,7 +3,7 @@
 This is how postures are authored from measurable lip shapes rather than
 guessed numbers: give the lip dimensions of a viseme (as in
 ``data/visemes/targets.csv``) and get the activations of the speech functions
-(seed 002 Table 1) that produce them on the rig.
+(Edge & Maddock 2001, Table 1) that produce them on the rig.
 
 With :math:`\\mathbf x` the free activations (left/right pairs tied when
 ``symmetric``), :math:`m_j(\\mathbf x)` the measured dimensions
@@ -87,7 +87,7 @@ def fit_activations(rig, targets: Mapping[str, float], functions: Sequence[str] 
         changes from rest, as :func:`~visemeface.muscles.measure.lip_dimensions`
         reports them.
     functions : sequence of str
-        Rig functions free to vary (default: seed 002's twelve speech functions).
+        Rig functions free to vary (default: Edge & Maddock's (2001) twelve speech functions).
     symmetric : bool
         Tie each ``_left``/``_right`` pair to one value.
     weights : mapping, optional

@@ -2,7 +2,7 @@
 
 Every function takes rest positions ``points`` (N, 3) in metres and returns a
 displacement (N, 3) for activation 1; displacements of the linear and sphincter
-muscles are linear in the activation (seed 002 §2.1, Waters 1987), so a rig can
+muscles are linear in the activation (Edge & Maddock 2001, §2.1, Waters 1987), so a rig can
 precompute them once as basis fields. The jaw is a rotation, nonlinear in its
 angle, and is evaluated on demand from :func:`jaw_rotation_displacement`.
 
@@ -138,7 +138,7 @@ def sphincter_displacement(points: np.ndarray, centre, axis_x, axis_y, semi_x: f
 
     The drawstring contraction pulls tissue toward the centre, by the fraction
     :math:`k\,d` of its distance to the *shielded disc* of radius :math:`r_s`
-    (seed 002 §2.1.2: the semi-minor axis :math:`l_y`, the default), where
+    (Edge & Maddock 2001, §2.1.2: the semi-minor axis :math:`l_y`, the default), where
     :math:`g` is a C1 ramp: 0 for :math:`s \le 0`, :math:`s^2/2\delta` up to
     :math:`\delta` (``ramp``, default :math:`r_s`), then :math:`s - \delta/2`, so
     :math:`0 \le g \le s` and :math:`0 \le g' \le 1` (no shading crease at
@@ -265,9 +265,44 @@ def jaw_centre_weight(u: np.ndarray, reach: float) -> np.ndarray:
     1 on the face's centre line (:math:`u = 0`), falling smoothly to 0 at
     :math:`|u| = U` (``reach``, same units as ``u``), so the open mouth is a
     smooth curve with the largest drop at the centre of the lower lip
-    (seed 002 §2.1.4).
+    (Edge & Maddock 2001, §2.1.4).
     """
     return np.cos(np.minimum(np.abs(np.asarray(u, dtype=float)) / reach, 1.0) * np.pi / 2) ** 2
+
+
+def jaw_neck_weight(points: np.ndarray, joint_left, joint_right, chin, forward, fade: float) -> np.ndarray:
+    r"""Jaw weight factor (N,) that keeps the mandible's motion off the throat and the back of the head.
+
+    About the jaw axis (through the joints), each point has an angle :math:`\phi` measured from the forward
+    direction turning down and back; the chin lies at :math:`\phi_c`. The factor is 1 for
+    :math:`\phi \le \phi_c` (the lips, chin and cheeks in front of the chin's line) and falls smoothly
+    (smoothstep) to 0 at :math:`\phi_c + ` ``fade`` (radians): the skin under the chin follows partly, the
+    throat and the nape not at all. A face that ends at the chin (the default face) is unchanged.
+    """
+    jl, jr = np.asarray(joint_left, float), np.asarray(joint_right, float)
+    k = _unit(jl - jr)
+    f = np.asarray(forward, float)
+    f = _unit(f - (f @ k) * k)
+    down = np.cross(k, f)                      # left x forward = down
+    o = 0.5 * (jl + jr)
+
+    def angle(p):
+        r = np.asarray(p, float) - o
+        return np.arctan2(r @ down, r @ f)      # 0 forward, +pi/2 straight down, pi behind
+
+    phi = angle(points)
+    phi = np.where(phi < -np.pi / 2, phi + 2 * np.pi, phi)   # above-behind (the scalp) counts as far behind
+    return 1.0 - smoothstep(float(angle(chin)), float(angle(chin)) + fade, phi)
+
+
+def jaw_angle_for_drop(joint_left, joint_right, point, drop: float) -> float:
+    """The jaw angle (rad) that moves ``point`` (the lower lip's centre) by the chord ``drop`` (m) about the
+    joints' axis; NaN when ``drop`` is not positive or beyond the point's reach (twice its radius)."""
+    jl, jr = np.asarray(joint_left, float), np.asarray(joint_right, float)
+    k = _unit(jl - jr)
+    r = np.asarray(point, float) - jr
+    radius = float(np.linalg.norm(r - (r @ k) * k))
+    return float(2.0 * np.arcsin(drop / (2.0 * radius))) if 0 < drop < 2 * radius else float("nan")
 
 
 def jaw_rotation_displacement(points: np.ndarray, joint_left, joint_right, angle: float,

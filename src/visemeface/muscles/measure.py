@@ -1,4 +1,4 @@
-"""Lip dimensions measured on any posed face mesh (seed 002 Table 1's lip dimensions).
+"""Lip dimensions measured on any posed face mesh (Edge & Maddock 2001, Table 1's lip dimensions).
 
 All measures are taken in the *rest* mouth frame of the face
 (:func:`visemeface.muscles.rig.mouth_frame`: x toward the subject's left

@@ -15,7 +15,7 @@ is
 
 where the jaw term :math:`J` rotates the lower face about the jaw-joint axis
 (nonlinear in its angle, evaluated per pose). Activations are clamped to each
-muscle's range (seed 002 §2.1.3) with a warning naming the muscles.
+muscle's range (Edge & Maddock 2001, §2.1.3) with a warning naming the muscles.
 
 Rig file format
 ---------------
@@ -37,19 +37,21 @@ from __future__ import annotations
 import functools
 import warnings
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from visemeface.errors import InputError, close_matches
 from visemeface.muscles import functions as mf
+from visemeface.muscles.posing import MovingProduct
 from visemeface.resources import data_path
+from visemeface.muscles.muscle import Muscle
 from visemeface.muscles.rigfile import CONVENTION_REGIONS, LIP_SIDES, _RigFileReader, muscles_from  # noqa: F401
 
-__all__ = ["Muscle", "MouthFrame", "MuscleRig", "default_rig", "mouth_frame", "SPEECH_FUNCTIONS"]
+__all__ = ["MouthFrame", "MuscleRig", "default_rig", "mouth_frame", "SPEECH_FUNCTIONS"]
 
-#: Seed 002 Table 1: the twelve functions used for visual speech.
+#: Edge & Maddock (2001) Table 1: the twelve functions used for visual speech.
 SPEECH_FUNCTIONS = (
     "orbicularis_oris",
     "risorius_left", "risorius_right",
@@ -59,7 +61,6 @@ SPEECH_FUNCTIONS = (
     "depressor_anguli_oris_left", "depressor_anguli_oris_right",
     "jaw",
 )
-
 
 
 @dataclass(frozen=True)
@@ -94,67 +95,11 @@ def mouth_frame(face) -> MouthFrame:
     return MouthFrame(origin=(cl + cr) / 2, axes=np.stack([ex, ey, ez]), width=width)
 
 
-@dataclass
-class Muscle:
-    """One muscle placed on a face (positions in metres, angles in radians)."""
-
-    name: str
-    kind: str  # "linear" | "sphincter" | "local" | "turn"
-    side: str  # "left" | "right" | "centre"
-    lip: str  # "upper" | "lower" | "both"
-    range: tuple
-    attachment: np.ndarray | None = None
-    insertion: np.ndarray | None = None
-    zone_angle: float = 0.0
-    falloff_start: float = 0.0
-    falloff_end: float = 0.0
-    centre: np.ndarray | None = None
-    semi_x: float = 0.0
-    semi_y: float = 0.0
-    k: float = 0.0
-    protrusion: float = 0.0
-    depth: float | None = None
-    shield: float | None = None
-    exclude: tuple = ()
-    description: str = ""
-    params: dict = field(default_factory=dict)
-    radii: np.ndarray | None = None        # "local": Gaussian radii (m) per axis
-    direction: np.ndarray | None = None    # "local": displacement (m) at the centre at activation 1
-    mask: np.ndarray | None = None         # "local": (N,) bool, the vertices it may move
-    symmetric: bool = False                # "local": plus its mirror image about the mouth's mid-plane
-    direction_lower: np.ndarray | None = None   # "local": the lower lip's direction (lip-trimmed), if any
-    inner: float | None = None             # "local": a lateral band from this distance (m) instead of a Gaussian
-    axis: np.ndarray | None = None         # "turn": rotation axis (world), angle in ``k`` (radians at 1);
-    #                                        ``inner`` is then the radius of the part that turns (m)
-
-    def field(self, points: np.ndarray, frame: MouthFrame, direction: np.ndarray | None = None) -> np.ndarray:
-        """Untrimmed displacement (N, 3) at activation 1 (a local function's ``direction`` may be replaced)."""
-        if self.kind == "turn":
-            return mf.turn_displacement(points, self.centre, self.axis, self.k, self.mask, self.inner,
-                                        frame.axes[2])
-        if self.kind == "local":
-            if self.mask is None or not self.mask.any():
-                return np.zeros_like(np.asarray(points, dtype=float))
-            d = self.direction if direction is None else direction
-            out = mf.local_displacement(points, self.centre, self.radii, d, self.mask, frame.axes, self.inner)
-            if self.symmetric:
-                ex = frame.axes[0]
-                c = self.centre - 2 * ((self.centre - frame.origin) @ ex) * ex
-                out = out + mf.local_displacement(points, c, self.radii, d - 2 * (d @ ex) * ex, self.mask,
-                                                  frame.axes)
-            return out
-        if self.kind == "linear":
-            return mf.linear_muscle_displacement(points, self.attachment, self.insertion, self.zone_angle,
-                                                 self.falloff_start, self.falloff_end, self.k)
-        return mf.sphincter_displacement(points, self.centre, frame.axes[0], frame.axes[1], self.semi_x,
-                                         self.semi_y, self.k, self.protrusion, self.depth, self.shield)
-
-
 class MuscleRig:
     """Muscles and jaw placed on a face, with precomputed displacement bases.
 
     Build with :meth:`from_file`. Attributes: ``face``, ``muscles`` (list of
-    :class:`Muscle`), ``names`` (muscle names then ``"jaw"``), ``ranges``
+    :class:`~visemeface.muscles.muscle.Muscle`), ``names`` (muscle names then ``"jaw"``), ``ranges``
     ((M+1, 2)), ``bases`` ((M, N, 3) trimmed displacement at activation 1),
     ``upper_weight`` ((N,) lip-trim weight of upper-lip muscles), ``jaw_weight``
     ((N,)), ``frame`` (:class:`MouthFrame`), ``path`` (the rig file).
@@ -164,15 +109,12 @@ class MuscleRig:
                  path: Path | None = None):
         self.face = face
         self.muscles = muscles
-        self.frame = frame
-        self.path = path
-        self.jaw = jaw
-        self.trim = trim
+        self.frame, self.path = frame, path
+        self.jaw, self.trim = jaw, trim
         self.names = tuple(m.name for m in muscles) + ("jaw",)
         self.index = {n: i for i, n in enumerate(self.names)}
         self.ranges = np.array([m.range for m in muscles] + [jaw["range"]], dtype=float)
-        rest = face.vertices
-        self.rest = rest
+        self.rest = rest = face.vertices
         local = frame.to_local(rest)
         u = local[:, 0] / (frame.width / 2)
         self.upper_weight = self._trim_weights(face, frame, local, u, trim)
@@ -196,6 +138,10 @@ class MuscleRig:
         jaw_trim = dict(trim, corner_start=jaw["corner_start"], corner_end=jaw["corner_end"])
         jaw_lower = 1.0 - self._trim_weights(face, frame, local, u, jaw_trim, tag=jaw["tag"])
         jw = mf.jaw_centre_weight(u, jaw["reach"]) * jaw_lower
+        if jaw.get("neck_fade") is not None:
+            jw = jw * mf.jaw_neck_weight(rest, face.landmark_position(jaw["joints"][0]),
+                                         face.landmark_position(jaw["joints"][1]), face.landmark_position("chin"),
+                                         frame.axes[2], jaw["neck_fade"])
         for region in jaw.get("rigid", ()):
             jw[face.regions[region]] = 1.0      # lower teeth, gum and tongue turn with the mandible
         for region in jaw["exclude"]:
@@ -226,7 +172,6 @@ class MuscleRig:
         checked against :meth:`jaw_displacement` in the tests).
         """
         from math import factorial
-
         n = len(self.rest)
         lo, hi = self.jaw["range"]
         theta_max = max(abs(lo), abs(hi)) * self.max_jaw_angle * (self._jaw_w.max() if len(self._jaw_w) else 0.0)
@@ -248,6 +193,12 @@ class MuscleRig:
         self._matrix = np.ascontiguousarray(np.vstack(rows), dtype=np.float32)
         self._rest_flat = self.rest.reshape(-1)
         self._powers = np.arange(1, degree + 1)
+        self._moving = MovingProduct(self._matrix, self._rest_flat)   # the product :meth:`pose` makes
+
+    def still_vertices(self, activations=None) -> np.ndarray:
+        """(N,) bool: the vertices at rest in every :meth:`pose` (of the clamped ``activations``, (F, M+1), given)."""
+        c = None if activations is None else np.abs(self._coefficients(np.atleast_2d(activations))).max(0) > 0
+        return self._moving.still(c)
 
     def _coefficients(self, a: np.ndarray) -> np.ndarray:
         """``[a_muscles, theta, theta^2, ...]`` for activations (..., M+1)."""
@@ -281,6 +232,9 @@ class MuscleRig:
         frame = mouth_frame(face)
         reader = _RigFileReader(path, face, frame)
         muscles = muscles_from(reader)
+        fade = {**getattr(face, "rig_defaults", {}).get("defaults", {}), **reader.data.get("defaults", {})}
+        for m in muscles if "attachment_fade" in fade else ():
+            m.params = {**m.params, "attachment_fade": float(fade["attachment_fade"])} if m.kind == "linear" else m.params
         t = reader.data.get("trim", {})
         trim = {f: reader.get(t, "trim", f, float) for f in
                 ("inner_width", "outer_width", "corner_start", "corner_end", "smooth")}
@@ -294,6 +248,7 @@ class MuscleRig:
         j = reader.data.get("jaw")
         if not isinstance(j, Mapping):
             raise reader.error("jaw", "jaw", "missing [jaw] table")
+        j = {**getattr(face, "rig_defaults", {}).get("jaw", {}), **j}
         joints = j.get("joints", ["jaw_joint_left", "jaw_joint_right"])
         if not (isinstance(joints, list) and len(joints) == 2 and all(isinstance(x, str) for x in joints)):
             raise reader.error("jaw", "joints", f"expected two landmark names, got {joints!r}")
@@ -308,9 +263,17 @@ class MuscleRig:
             "corner_start": reader.get(j, "jaw", "corner_start", float, trim["corner_start"]),
             "corner_end": reader.get(j, "jaw", "corner_end", float, trim["corner_end"]),
             "tag": reader.get(j, "jaw", "tag", float, 2.0),
+            "neck_fade": (np.radians(reader.get(j, "jaw", "neck_fade_deg", float))
+                          if "neck_fade_deg" in j else None),
         }
         if not 0 <= jaw["corner_start"] < jaw["corner_end"]:
             raise reader.error("jaw", "corner_end", "need 0 <= corner_start < corner_end")
+        if "max_drop" in j:     # the same opening in mouth widths on a head whose jaw joints lie further back
+            drop = reader.get(j, "jaw", "max_drop", float)
+            jaw["max_angle"] = mf.jaw_angle_for_drop(*(face.landmark_position(n) for n in joints),
+                                                     face.landmark_position("lower_lip_mid"), drop * frame.width)
+            if not np.isfinite(jaw["max_angle"]):
+                raise reader.error("jaw", "max_drop", f"must be positive and below the jaw's reach, got {drop}")
         jaw["exclude"] = reader.regions(jaw["exclude"], "jaw", "exclude")
         jaw["rigid"] = reader.regions(reader.get(j, "jaw", "rigid", "regions", ()), "jaw", "rigid")
         if jaw["reach"] <= 0:
@@ -319,7 +282,7 @@ class MuscleRig:
 
     # -------------------------------------------------------- activations
     def muscle(self, name: str) -> Muscle:
-        """The :class:`Muscle` called ``name`` (InputError with close matches if unknown)."""
+        """The :class:`~visemeface.muscles.muscle.Muscle` called ``name`` (InputError with close matches if unknown)."""
         for m in self.muscles:
             if m.name == name:
                 return m
@@ -379,12 +342,9 @@ class MuscleRig:
 
     def pose(self, a) -> np.ndarray:
         """Posed vertices (N, 3): rest + :meth:`displacement`. ``a``: mapping or vector in ``names`` order."""
-        a = self._vector(a)
-        c = self._coefficients(a)
-        # only the functions in use: a pose uses a third of the rig's 40-odd rows, and a small
-        # product stays on one thread (a multithreaded BLAS call costs 1-10 ms on a busy machine)
-        used = np.flatnonzero(c)
-        return (self._rest_flat + c[used] @ self._matrix[used]).reshape(-1, 3)
+        # the functions in use only, on one thread (and on a large mesh its moving vertices only):
+        # visemeface.muscles.posing
+        return self._moving(self._coefficients(self._vector(a))).reshape(-1, 3)
 
     def track_matrix(self, track) -> np.ndarray:
         """An ActivationTrack (DataFrame, columns = rig functions) as (F, M+1) floats in ``names`` order.
@@ -476,3 +436,22 @@ def default_rig(resolution: int | None = None) -> MuscleRig:
     ``ValueError``). Build your own with ``MuscleRig.from_file(default_face())`` to modify one.
     """
     return _default_rig(resolution)
+
+
+def rig_for(face: str | None = None, landmarks=None, rig=None, identity=None, skin=None) -> MuscleRig:
+    """The rig of a command's ``--face``/``--landmarks``/``--rig``/``--identity``/``--skin`` (a batch's
+    same fields; :func:`visemeface.face.chosen_face`): the default rig on the embedded face when all are
+    None."""
+    from visemeface.errors import InputError
+    from visemeface.face import chosen_face
+
+    if skin and face not in (None, "procedural"):
+        raise InputError(f"--skin colours the embedded procedural face, not --face {face}")
+    plain = face == "procedural" and not identity and not landmarks
+    mesh = None if plain else chosen_face(face, identity, landmarks)
+    if mesh is not None:
+        return MuscleRig.from_file(mesh, rig)
+    if rig or skin:
+        from visemeface.face.procedural import default_face
+        return MuscleRig.from_file(default_face(skin=skin), rig)
+    return default_rig()

@@ -2,7 +2,7 @@
 
 See :mod:`visemeface.muscles.rig` for the format. The reader resolves points
 (landmarks, mixes and offsets in mouth widths along the mouth frame) and region
-names; :func:`muscles_from` builds the :class:`~visemeface.muscles.rig.Muscle` list.
+names; :func:`muscles_from` builds the :class:`~visemeface.muscles.muscle.Muscle` list.
 """
 
 from __future__ import annotations
@@ -136,8 +136,8 @@ class _RigFileReader:
 
 
 def muscles_from(reader: _RigFileReader) -> list:
-    """The :class:`~visemeface.muscles.rig.Muscle` entries of a rig file, placed on the reader's face."""
-    from visemeface.muscles.rig import Muscle
+    """The :class:`~visemeface.muscles.muscle.Muscle` entries of a rig file, placed on the reader's face."""
+    from visemeface.muscles.muscle import Muscle
 
     data = reader.data
     entries = data.get("muscle")

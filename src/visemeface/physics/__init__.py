@@ -1,7 +1,7 @@
-"""Finite-element soft tissue: hex8 meshes and the TLED solver (seed 000, DESIGN §6).
+"""Finite-element soft tissue: hex8 meshes and the TLED solver (Leach & Maddock 2018; Miller et al. 2007).
 
-Modules
--------
+Its modules:
+
 hexmesh
     :class:`~visemeface.physics.hexmesh.HexMesh`, ``box_mesh``, ``extrude_quads``
     (a FaceMesh's quads pushed inward into hexahedra), quality checks.
@@ -15,9 +15,9 @@ tled
     boundary conditions, an element-force hook; numba kernels and a numpy
     reference.
 
-The FEM face (issue 16) is built from explicit parts: ``face_model`` (the
+The FEM face is built from explicit parts: ``face_model`` (the
 extruded face and its saliva hexahedra), ``drive`` (the muscle field and the
-jaw from an activation track; ``scenarios`` for the seed's tracks), ``film``
+jaw from an activation track; ``scenarios`` for Leach & Maddock's (2018) tracks), ``film``
 (the saliva film on >= 48 slabs, one compiled breaking rule; constitutive law
 in ``saliva``, glue profiles in ``glue``), ``terms`` (force terms), ``state``
 (the one exactly-restorable state), ``integrator`` (model + central
@@ -41,5 +41,10 @@ True
 The numba modules are imported on first use of ``tled`` (``import visemeface``
 stays fast).
 """
+
+#: The physics kinds of ``--physics`` (besides none): the sticky lips (saliva film) and the tissue alone. Here,
+#: not in :mod:`.simulation`, so that a command line lists them without importing the solver (numba, scipy).
+PHYSICS = ("sticky", "elastic")
+
 
 __all__ = ["hexmesh", "materials", "tled"]

@@ -1,6 +1,6 @@
 """The FEM face: the lower face extruded into hexahedra, with a saliva layer between the lips.
 
-Seed 000 §3.1 built its model by extruding the quads of a face surface into
+Leach & Maddock (2018) §3.1 built its model by extruding the quads of a face surface into
 hex8 elements and marking a thin saliva layer between the lips. Here, from any
 :class:`~visemeface.face.mesh.FaceMesh` with regions and landmarks:
 
@@ -124,7 +124,7 @@ class FEMFace:
         return np.flatnonzero(self.mesh.material == TISSUE)
 
     def counts(self) -> dict:
-        """Node and element counts (seed 000: 6,982 nodes, 3,414 hexahedra)."""
+        """Node and element counts (Leach & Maddock 2018: 6,982 nodes, 3,414 hexahedra)."""
         return {"nodes": int(self.mesh.n_nodes), "elements": int(self.mesh.n_elements),
                 "tissue": int(len(self.tissue)), "saliva": int(len(self.saliva)),
                 "fixed_nodes": int(len(self.mesh.node_sets["fixed"])),
@@ -269,7 +269,7 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
     saliva_gap : float or None
         Rest thickness (m) of the saliva layer. The seam pairs are moved apart
         symmetrically (along +y) to this uniform gap, so every saliva element
-        has the same thickness, as the seed's breaking rule assumes ("all the
+        has the same thickness, as Leach & Maddock's (2018) breaking rule assumes ("all the
         elements being the same thickness", §3.4.3); a face with closed lips
         (``rest_gap=0``) works too. None keeps the face's own gaps and drops
         pairs thinner than ``min_gap``. The model's ``face`` is the re-gapped
@@ -292,7 +292,7 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
         layers equal and saliva through the full depth.
     min_gap : float
         Smallest rest gap (m) accepted between paired seam vertices: thinner
-        saliva would force a time step under the seed's 1e-5 s.
+        saliva would force a time step under Leach & Maddock's (2018) 1e-5 s.
     seam_elements : int or None
         At least this many tissue elements along the lip seam
         (:func:`visemeface.face.refine.refine_lip_seam`: the quad strips across the seam split,

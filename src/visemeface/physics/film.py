@@ -36,7 +36,7 @@ from visemeface.physics.saliva import (DECAY_STEP, FILM_STIFF_STRETCH, SalivaPar
                                        element_frames, film_gradients, hex_centre_gradients, moisture,
                                        stretch_across)
 
-#: Least number of film slabs across the mouth (issue 16: the open span grows in steps
+#: Least number of film slabs across the mouth (the open span grows in steps
 #: of at most 1/48 of the mouth, whatever the face mesh's resolution).
 FILM_ELEMENTS = 48
 #: The stretch Q of a slab folded over (J ≤ 0): larger than any real one.

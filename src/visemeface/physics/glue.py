@@ -14,15 +14,19 @@ import numpy as np
 
 from visemeface.errors import InputError
 
-#: Seed 000 / 001 Table 1: the uniform glue and seed 001's central element's glue.
+#: Leach & Maddock (2018, 2019) Table 1: the uniform glue and Leach & Maddock's (2019) central element's glue.
 GLUE = 0.08
 CENTRAL_GLUE = 0.18
 #: Half-width in s of the ``centre`` a glue profile names: the mouth's central twelfth (|s| ≤ 1/12).
-#: Seed 001 glues "one of the central elements" of its face; the seed-scale face (the default face,
+#: Leach & Maddock (2019) glue "one of the central elements" of their face; the seed-scale face (the default face,
 #: 12 saliva elements across) has elements 1/12 of the mouth wide. Named by width, not by element, so
 #: the stuck patch is the same size on a refined face or a film finer than the face (48 slabs: the
 #: two slabs nearest the centre are 1/24 of the mouth, a patch half the seed's).
 CENTRAL_HALF_WIDTH = 1.0 / 12.0
+#: Strongest glue taken (option, profile item or file value): 125 times Leach & Maddock's (2018) 0.08. The film's stable
+#: time step shrinks as 1/sqrt(glue), so at 10 it is 11 times the default's; 1e308 made it 0 and the run
+#: failed with "time step must be a positive number, got 0.0", naming no option.
+MAX_GLUE = 10.0
 
 _ITEM = re.compile(r"^\s*([A-Za-z_]+|[-+]?\d*\.?\d+\s*\.\.\s*[-+]?\d*\.?\d+)\s*=\s*([^=]+?)\s*$")
 _NAMED = ("centre", "center", "left", "right", "corners", "all")
@@ -33,8 +37,8 @@ def _positive_glue(text: str, spec: str) -> float:
         v = float(text)
     except ValueError:
         raise InputError(f"glue profile {spec!r}: {text!r} is not a number") from None
-    if not np.isfinite(v) or v < 0:
-        raise InputError(f"glue profile {spec!r}: glue must be >= 0, got {v}")
+    if not np.isfinite(v) or not 0 <= v <= MAX_GLUE:
+        raise InputError(f"glue profile {spec!r}: glue must be from 0 to {MAX_GLUE:g}, got {text.strip()[:24]}")
     return v
 
 
@@ -46,7 +50,7 @@ def parse_glue_profile(spec: str, s, base: float = GLUE) -> np.ndarray:
     spec : str
         Comma-separated ``WHERE=VALUE`` items applied left to right over
         ``base``. WHERE is ``all``; ``centre`` (the elements in the mouth's
-        central twelfth, |s| ≤ :data:`CENTRAL_HALF_WIDTH`: seed 001's "central
+        central twelfth, |s| ≤ :data:`CENTRAL_HALF_WIDTH`: Leach & Maddock's (2019) "central
         element"; the one(s) nearest the centre, ties included, if none is);
         ``left`` / ``right`` (the subject's left, s > 0 / right, s < 0);
         ``corners`` (|s| ≥ 0.7); or a range ``a..b`` of s. A bare number sets
@@ -107,7 +111,17 @@ def parse_glue_profile(spec: str, s, base: float = GLUE) -> np.ndarray:
     return glue
 
 
-def read_glue_file(path, s) -> np.ndarray:
+def check_glue_sources(profile: str | None = None, path: str | Path | None = None) -> None:
+    """Refuse a glue profile or file that cannot be read, or whose values are out of range, before any face
+    is built (which places of the mouth the items name is checked on the face, by :func:`glue_per_element`)."""
+    across = np.linspace(-1.0, 1.0, 2001)                 # every place an item can name, finely
+    if profile:
+        parse_glue_profile(profile, across)
+    if path is not None:
+        read_glue_file(path, across, check_elements=False)
+
+
+def read_glue_file(path, s, check_elements: bool = True) -> np.ndarray:
     """Glue per saliva element from a CSV file.
 
     Two layouts (header line required):
@@ -143,14 +157,16 @@ def read_glue_file(path, s) -> np.ndarray:
             k, v = float(row[0]), float(row[1])
         except ValueError:
             raise InputError(f"not a number in {','.join(row)!r}", path, i) from None
-        if not np.isfinite(v) or v < 0:
-            raise InputError(f"glue must be >= 0, got {row[1].strip()}", path, i)
+        if not np.isfinite(v) or not 0 <= v <= MAX_GLUE:
+            raise InputError(f"glue must be from 0 to {MAX_GLUE:g}, got {row[1].strip()[:24]}", path, i)
         keys.append(k)
         vals.append(v)
     if not keys:
         raise InputError("no glue values", path)
     keys, vals = np.array(keys), np.array(vals)
     if header[0] == "element":
+        if not check_elements:
+            return np.full(len(s), np.nan)
         idx = keys.astype(np.int64)
         bad = (idx != keys) | (idx < 0) | (idx >= len(s))
         if bad.any():
@@ -170,8 +186,8 @@ def glue_per_element(s, glue: float = GLUE, profile: str | None = None,
                      path: str | Path | None = None) -> np.ndarray:
     """Combine the three ways of giving glue: uniform ``glue``, then a ``profile``, or a file."""
     s = np.asarray(s, dtype=np.float64)
-    if not np.isfinite(glue) or glue < 0:
-        raise InputError(f"glue must be >= 0, got {glue}")
+    if not np.isfinite(glue) or not 0 <= glue <= MAX_GLUE:
+        raise InputError(f"glue must be from 0 to {MAX_GLUE:g}, got {glue}")
     if path is not None:
         return read_glue_file(path, s)
     if profile:

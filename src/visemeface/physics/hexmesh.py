@@ -5,7 +5,7 @@ metres, ``hexes`` (e, 8) int64 node ids, ``material`` (e,) int64 ids into a
 material table (:mod:`visemeface.physics.materials`) and ``node_sets`` (name ->
 sorted int64 node ids).
 
-Node order inside a hexahedron (DESIGN §6, NiftySim's): with local
+Node order inside a hexahedron (NiftySim's): with local
 coordinates (ξ, η, ζ) ∈ [−1, 1]³ the eight nodes sit at
 
 =====  ====  ====  ====
@@ -27,7 +27,7 @@ Jacobian ∂x/∂ξ has a positive determinant for a well-formed element.
 Two ways to make a mesh: :func:`box_mesh` (structured block, for tests and
 benchmarks) and :func:`extrude_quads` (any quad surface, e.g. a ``FaceMesh``'s
 ``quads``, pushed inward along its vertex normals into layers of hexahedra, as
-seed 000 §3.1 built its face model). :func:`check_quality` refuses inverted
+Leach & Maddock (2018) §3.1 built its face model). :func:`check_quality` refuses inverted
 or degenerate elements with the element id in the message.
 """
 
@@ -420,7 +420,8 @@ def check_quality(mesh: HexMesh, max_aspect: float | None = 20.0, min_scaled_jac
         raise InputError(
             f"{len(bad)} hex element(s) inverted or degenerate; first: element {e} "
             f"(nodes {mesh.hexes[e].tolist()}) has scaled Jacobian {q['scaled_jacobian'][e]:.3g} "
-            f"<= {min_scaled_jacobian:g} (node order must follow DESIGN §6)")
+            f"<= {min_scaled_jacobian:g} (node order must be NiftySim's: nodes 0-3 one face, counter-clockwise seen from the opposite face, "
+            f"nodes 4-7 that opposite face in the same order)")
     if max_aspect is not None:
         bad = np.flatnonzero(~(q["aspect_ratio"] <= max_aspect))
         if len(bad):

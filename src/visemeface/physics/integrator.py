@@ -13,12 +13,12 @@ advances a :class:`~visemeface.physics.state.SimState` by
    A = \\Big(\\frac{M}{\\Delta t^2} + \\frac{\\alpha M}{2\\Delta t}\\Big)^{-1},\\;
    B = \\frac{2 M A}{\\Delta t^2},\\; C = \\frac{\\alpha M A}{2\\Delta t} - \\frac{B}{2}
 
-(``M ü + α M u̇ + F(u) = R`` with centred differences, DESIGN §6), fixed
+(``M ü + α M u̇ + F(u) = R`` with centred differences, as NiftySim's TLED), fixed
 degrees of freedom held at zero and the jaw nodes set to their value at
 ``tⁿ⁺¹``. Everything a step reads is in (model, state), so stepping a restored
 state repeats a run bit for bit.
 
-**Multi-rate (issue 17).** The saliva film is far stiffer than the tissue (its
+**Multi-rate.** The saliva film is far stiffer than the tissue (its
 stable step on the default face is 4.8e-5 s, the tissue's 1.8e-4 s) but acts
 only on the few nodes it is tied to (52 of 3,558). With ``substeps`` m > 1 the
 other nodes take the step Δt and those *film nodes* take m substeps δt = Δt/m:

@@ -1,6 +1,6 @@
 """Compressible neo-Hookean and Gent materials for the TLED solver, and their analytic laws.
 
-The strain energy per unit reference volume (NiftySim's, DESIGN §6) is
+The strain energy per unit reference volume (NiftySim's TLED, Miller et al. 2007) is
 
 .. math::
 
@@ -24,8 +24,8 @@ Small strains give Lamé λ = K − 2μ/3 and the pressure (P-) wave speed
 ``c = sqrt((K + 4μ/3) / ρ)`` that bounds the explicit time step.
 
 A model's materials are a sequence of :class:`NeoHookean`; each element's
-``HexMesh.material`` id indexes it (id 0 soft tissue, id 1 the saliva layer of
-issue 8, …). :func:`material_table` turns the sequence into per-element arrays.
+``HexMesh.material`` id indexes it (id 0 soft tissue, id 1 the saliva layer between
+the lips, …). :func:`material_table` turns the sequence into per-element arrays.
 """
 
 from __future__ import annotations
@@ -123,15 +123,15 @@ class NeoHookean:
         return (3 * self.K - 2 * self.mu) / (2 * (3 * self.K + self.mu))
 
 
-#: Soft facial tissue of seed 000 Table 1.
+#: Soft facial tissue of Leach & Maddock (2018) Table 1.
 SOFT_TISSUE = NeoHookean(mu=800.0, K=7000.0, rho=1050.0, name="soft_tissue")
-#: The stiff saliva layer between the lips of seed 000 Table 1.
+#: The stiff saliva layer between the lips of Leach & Maddock (2018) Table 1.
 SALIVA = NeoHookean(mu=7700.0, K=191000.0, rho=1050.0, name="saliva")
 #: The speech lips' limiting (isochoric, uniaxial) stretch for the soft tissue (Gent; ``PhysicsSettings.speech``;
-#: the seed's model, ``PhysicsSettings()``, stays neo-Hookean). The cause is physical: soft tissue stiffens
-#: as it is stretched, and seed 000's neo-Hookean tissue never does, so under glue 0.3 at full jaw its lip
+#: Leach & Maddock's (2018) model, ``PhysicsSettings()``, stays neo-Hookean). The cause is physical: soft tissue stiffens
+#: as it is stretched, and Leach & Maddock's (2018) neo-Hookean tissue never does, so under glue 0.3 at full jaw its lip
 #: tissue beside the film stretches 7.4x (99th percentile 6.85, against 1.94 without glue) and the film, 10x
-#: stiffer in shear, never breaks; at the seed's jaw 0.35 central glue 0.18 never lets go (issue 16). The
+#: stiffer in shear, never breaks; at Leach & Maddock's (2018) jaw 0.35 central glue 0.18 never lets go. The
 #: value is not a measurement of lips; it is chosen, said plainly, inside the window where the issue's
 #: figures hold (``scripts/sticky_figures.py --tissue-limit L``): at 2.6-2.9 the first /b/ of "Bob moves
 #: five boats" takes 3 frames at 60 fps (2.5: 2) and glue 0.3 at full jaw breaks every seam slab (3.0: 46 of
@@ -139,7 +139,7 @@ SALIVA = NeoHookean(mu=7700.0, K=191000.0, rho=1050.0, name="saliva")
 #: 2.5 a lip-corner element reaches its limit before a glue-0.3 film lets go, at a step of 1e-5 s as at the
 #: stable one (the jaw prescribed, the lips glued). With the muscles as an active strain the tissue's
 #: reference is the muscle field's natural shape, so without glue (F_e near I) the Gent tissue is the
-#: neo-Hookean one. What it costs: seed 001's double opening on a jaw eased to full over 1 s lasts 7
+#: neo-Hookean one. What it costs: Leach & Maddock's (2019) double opening on a jaw eased to full over 1 s lasts 7
 #: frames (neo-Hookean 10; README's table).
 TISSUE_LIMIT = 2.8
 

@@ -1,6 +1,6 @@
-"""Activation tracks for the FEM face: the seed's scenarios, ramps, keyframes.
+"""Activation tracks for the FEM face: Leach & Maddock's (2018) scenarios, ramps, keyframes.
 
-Scenarios (:func:`scenario_track`) are small activation tracks for the seed's
+Scenarios (:func:`scenario_track`) are small activation tracks for Leach & Maddock's (2018)
 experiments (jaw lowered and raised, the mouth opened and closed twice).
 """
 
@@ -11,15 +11,15 @@ import pandas as pd
 
 from visemeface.errors import InputError, close_matches
 
-#: Seed 000/001 scenarios as (time s, value) keyframes of the jaw (and, for the
+#: Leach & Maddock's (2018, 2019) scenarios as (time s, value) keyframes of the jaw (and, for the
 #: one-sided variants, the lower-lip depressor of one side), eased with a smoothstep.
 SCENARIOS = {
-    # the mouth opened and closed twice (seed 001 Fig. 18: "closed and reopened twice")
+    # the mouth opened and closed twice (Leach & Maddock 2019, Fig. 18: "closed and reopened twice")
     "open": [(0.0, 0.0), (0.05, 0.0), (0.40, 1.0), (0.60, 1.0), (0.85, 0.0), (0.95, 0.0),
              (1.30, 1.0), (1.50, 1.0), (1.75, 0.0), (1.80, 0.0)],
-    # a single opening held open (equilibrium with and without glue, seed 000 Fig. 8)
+    # a single opening held open (equilibrium with and without glue, Leach & Maddock (2018) Fig. 8)
     "open-once": [(0.0, 0.0), (0.05, 0.0), (0.40, 1.0), (0.75, 1.0)],
-    # a slight opening: sticky lips stay joined toward the corners (seed 000 Fig. 7)
+    # a slight opening: sticky lips stay joined toward the corners (Leach & Maddock 2018, Fig. 7)
     "part": [(0.0, 0.0), (0.05, 0.0), (0.40, 0.45), (0.75, 0.45)],
 }
 SIDES = ("both", "left", "right")
@@ -85,7 +85,7 @@ def scenario_track(name: str, names, fps: float = 60.0, jaw: float = 0.35, side:
     side : {"both", "left", "right"}
         ``left``/``right``: also pull the lower lip down on that side only
         (``depressor_labii_inferioris_<side>`` at ``lip`` × the keyframe
-        value), an asymmetric opening (seed 000 Fig. 10).
+        value), an asymmetric opening (Leach & Maddock 2018, Fig. 10).
     lip : float
         Activation of that one-sided depressor at value 1.
     """

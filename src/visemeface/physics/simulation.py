@@ -1,8 +1,8 @@
 """The sticky-lip FEM face driven by an ActivationTrack: settings, model assembly, frames.
 
-:class:`StickySimulation` puts the parts together (issue 16): the face model's
+:class:`StickySimulation` puts the parts together: the face model's
 tissue, the muscle loads and the prescribed jaw of
-:class:`~visemeface.physics.drive.FaceDrive`, the saliva film on its own fine
+:class:`~visemeface.physics.loads.FaceDrive`, the saliva film on its own fine
 slabs (:class:`~visemeface.physics.film.SalivaFilm`), the force terms
 (:mod:`visemeface.physics.terms`) in one :class:`~visemeface.physics.integrator.FaceModel`,
 a :class:`~visemeface.physics.integrator.CentralDifference` integrator and one
@@ -29,7 +29,7 @@ from visemeface.physics.stability import SHAPE_SAMPLES, face_stable_step, natura
 from visemeface.physics.state import SimState
 
 
-PHYSICS = ("sticky", "elastic")
+from visemeface.physics import PHYSICS  # noqa: E402,F401  (its one home)
 #: Least volume ratio J of a tissue element in the drive's target (see :meth:`FaceDrive.untangle`).
 MIN_JACOBIAN = 0.3
 #: Force terms that can be switched off (:mod:`visemeface.physics.terms`).
@@ -42,7 +42,7 @@ THREAD_TRIAL_STEPS = 10
 
 @dataclass(frozen=True)
 class PhysicsSettings:
-    """Solver and saliva settings (seed 000/001 Table 1 defaults).
+    """Solver and saliva settings (defaults: Leach & Maddock 2018, 2019, Table 1).
 
     ``glue`` is the uniform glue strength K_glue; ``glue_profile`` a profile
     string (:func:`visemeface.physics.glue.parse_glue_profile`) applied over
@@ -68,15 +68,15 @@ class PhysicsSettings:
     ``threads``: numba threads for the steps; None (the default) times a few steps at numba's thread count
     and at one, at the start and every :data:`THREAD_CHECK_SECONDS` of simulated time, and runs on the
     faster (:func:`~visemeface.runtime.faster_thread_count`; the result is the same bits at any count).
-    ``tissue_limit``: the tissue's limiting (isochoric) stretch (Gent; inf, the default here: the seed's
+    ``tissue_limit``: the tissue's limiting (isochoric) stretch (Gent; inf, the default here: Leach & Maddock's (2018)
     neo-Hookean; :meth:`speech`: :data:`~visemeface.physics.materials.TISSUE_LIMIT`).
     ``seam_elements``: where the FEM face is built here from a face (:func:`physics_face`, the speech
     commands), its lips are refined to this many tissue elements along the seam
     (:func:`~visemeface.physics.face_model.build_fem_face`); None: the face's own elements.
 
-    These defaults are the seed's model. The speech commands run :meth:`speech`: the same with the
+    These defaults are Leach & Maddock's (2018) model. The speech commands run :meth:`speech`: the same with the
     lips refined along the seam, saliva strands that thin before they snap, the film carried into
-    the mouth corners and a tissue that stiffens (issue 16).
+    the mouth corners and a tissue that stiffens.
     """
 
     dt: float | None = None
@@ -101,23 +101,23 @@ class PhysicsSettings:
 
     @property
     def tissue(self):
-        """The soft tissue: seed 000's neo-Hookean ``SOFT_TISSUE``, Gent where ``tissue_limit`` is finite."""
+        """The soft tissue: Leach & Maddock's (2018) neo-Hookean ``SOFT_TISSUE``, Gent where ``tissue_limit`` is finite."""
         return SOFT_TISSUE.with_limiting_stretch(self.tissue_limit)
 
     @classmethod
     def speech(cls, **changes) -> PhysicsSettings:
-        """The sticky lips of ``speak``, ``say``, ``batch`` and ``simulate`` (issue 16), with ``changes``.
+        """The sticky lips of ``speak``, ``say``, ``batch`` and ``simulate``, with ``changes``.
 
         The lips refined to :data:`~visemeface.face.refine.SEAM_ELEMENTS` tissue elements along
         the seam, so the 48 film slabs can part one by one, and saliva strands that thin over
         :data:`~visemeface.physics.saliva.RUPTURE_TIME` before they snap: the lips unzip from the
-        centre over several frames. Without either, the seed's brittle film lets go along the whole
+        centre over several frames. Without either, Leach & Maddock's (2018) brittle film lets go along the whole
         seam in one frame (measured: ``scripts/sticky_figures.py``). ``RUPTURE_TIME`` is a value
         chosen inside saliva's measured range for that zipper, not a measurement of lips. The film
         runs on into the mouth corners (``film_corners``), where the lips meet: ended at the last
         pair of lip vertices it leaves the corners unglued, and they open as dark notches while the
         rest of the seam is stuck (on /f v/ and wide vowels in speech, and beside a held centre).
-        The tissue stiffens toward :data:`~visemeface.physics.materials.TISSUE_LIMIT` (Gent; the seed's
+        The tissue stiffens toward :data:`~visemeface.physics.materials.TISSUE_LIMIT` (Gent; Leach & Maddock's (2018)
         neo-Hookean lips stretch 7x and hold under glue 0.3 at full jaw; the limit is chosen, its reason there).
         """
         from visemeface.face.refine import SEAM_ELEMENTS
@@ -245,7 +245,7 @@ class StickySimulation:
 
     def __init__(self, fem, rig, track: pd.DataFrame, physics: str = "sticky",
                  settings: PhysicsSettings | None = None):
-        from visemeface.physics.drive import FaceDrive
+        from visemeface.physics.loads import FaceDrive
         from visemeface.physics.integrator import CentralDifference
 
         settings = settings or PhysicsSettings()

@@ -91,7 +91,7 @@ def critical_step(lam: float) -> float:
 #: The longest step (s) for a viscous film (``SalivaParams(viscosity=η)``, not the default): its Stefan
 #: flow is integrated explicitly and grows as h³ (h the film's thickness), so at longer steps the film
 #: reaches its breaking stretch before it has flowed (measured: 4 corner slabs flow at 1e-5 and 2e-5 s
-#: and break at 4.8e-5 s on the coarse face's fast opening); it was made and checked at the seed's 1e-5 s.
+#: and break at 4.8e-5 s on the coarse face's fast opening); it was made and checked at Leach & Maddock's (2018) 1e-5 s.
 FLOW_STEP = 1e-5
 #: Margin on the spectral limit: it is the tangent at rest, and the tissue stiffens as it is
 #: compressed (the neo-Hookean tangent grows as J falls: ~ +20 % in ω² at J = 0.85) — so 0.9 in Δt.

@@ -6,17 +6,17 @@ constants are computed once (:func:`element_geometry`,
 element and node loops, run by numba kernels (``parallel=True``, ``prange``,
 no allocation in the loops) or by an equivalent plain-numpy reference.
 
-One step (DESIGN §6; seed 000 §3.2)
+One step (NiftySim's TLED, Miller et al. 2007; Leach & Maddock 2018, §3.2)
 -----------------------------------
 For element e with nodal displacements ``u`` (8 × 3), uniform shape-function
 gradient ``∂h/∂x`` (8 × 3) and rest volume V:
 
 1. deformation gradient ``X = I + uᵀ ∂h/∂x``, ``C = XᵀX``, ``J = det X``;
 2. neo-Hookean ``S = μJ^{-2/3}(I − ⅓ tr C · C⁻¹) + K J (J − 1) C⁻¹``;
-3. element nodal forces ``Fe = V · X S (∂h/∂x)ᵀ`` (the seed's ``8 det J₀ ·
+3. element nodal forces ``Fe = V · X S (∂h/∂x)ᵀ`` (Leach & Maddock's (2018) ``8 det J₀ ·
    X S ∂hᵀ`` with the exact volume) plus hourglass forces ``k γ γᵀ u``;
 4. an optional hook may scale or replace each element's forces (breaking
-   saliva elements, issue 8);
+   saliva elements);
 5. element forces are gathered to nodes through a node → (element, local
    node) map (race-free) and the central difference with mass-proportional
    damping α advances every degree of freedom with lumped mass M:
@@ -66,7 +66,7 @@ from visemeface.physics.materials import (TISSUE_LIMIT, NeoHookean, gent_factor,
                                           second_piola_kirchhoff, strain_energy_density)
 from visemeface.runtime import set_threads  # noqa: F401  (re-exported: the solver's thread count)
 
-#: Hourglass base vectors Γ (8 × 4) for the node order of DESIGN §6: the
+#: Hourglass base vectors Γ (8 × 4) for NiftySim's hex8 node order (:mod:`visemeface.physics.hexmesh`): the
 #: columns are the products ξη, ηζ, ζξ, ξηζ of the nodes' local coordinates.
 HOURGLASS_BASE = np.array(
     [[1, 1, 1, -1], [-1, 1, -1, 1], [1, -1, -1, -1], [-1, -1, 1, 1],
@@ -75,7 +75,7 @@ HOURGLASS_BASE = np.array(
 #: Meshes with fewer elements run the numba kernels on one thread by default.
 PARALLEL_MIN_ELEMENTS = 1000
 
-#: Seed 000 Table 1's hourglass coefficient κ.
+#: Leach & Maddock (2018) Table 1's hourglass coefficient κ.
 DEFAULT_HOURGLASS_KAPPA = 0.075
 
 _GAUSS = NODE_SIGNS / np.sqrt(3.0)
@@ -458,7 +458,7 @@ def _step_nb(ue, conn, dhdx, vol, gamma, hgk, mu, K, ijm, fe, jac, fdef, energy,
 
     The same arithmetic as :func:`_element_forces_nb` then :func:`_integrate_nb`, without the return
     to Python between them: there the second thread fell asleep and had to be woken for each loop
-    (issue 17: 2 threads were slower than 1 on the 2,172-hex face). ``ue`` is the displacement the
+    (measured: 2 threads were slower than 1 on the 2,172-hex face). ``ue`` is the displacement the
     elements see (``u``, or ``u`` minus the active strain's field); ``u`` is integrated.
     """
     for e in prange(conn.shape[0]):
@@ -588,7 +588,7 @@ class TLEDSolver:
         exact volume (:func:`element_geometry`; NiftySim's B-matrix method),
         which pass the patch test on any mesh. ``"centre"``: gradients at the
         element centre with ``8 det J₀`` (:func:`centre_gradients`; NiftySim's
-        CPU default and DESIGN §6 read literally). Identical for parallelepipeds.
+        CPU default and NiftySim's formulation read literally). Identical for parallelepipeds.
     parallel : bool, optional
         Split the numba loops over threads (:func:`set_threads`). Default: only
         for meshes of at least ``PARALLEL_MIN_ELEMENTS`` elements, since on small
@@ -800,7 +800,7 @@ class TLEDSolver:
                 else "a non-finite deformation (NaN/inf displacement)" if not np.isfinite(J)
                 else f"J = {J:.4g} <= 0 (inverted)")
         advice = ("This motion stretches the tissue further than its limit allows: raise the limit (--tissue-limit; "
-                  f"the default, {TISSUE_LIMIT:g}, holds on the default face at glue 0.3 and full jaw; inf: the seed's "
+                  f"the default, {TISSUE_LIMIT:g}, holds on the default face at glue 0.3 and full jaw; inf: Leach & Maddock's (2018) "
                   "neo-Hookean tissue, which never stiffens) or lower the glue (a smaller dt does not help)"
                   if limit else f"Reduce dt (now {self.dt:.4g} s, stable limit {self.stable_dt:.4g} s), loads or "
                   f"prescribed motion, or raise damping")

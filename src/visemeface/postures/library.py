@@ -1,7 +1,7 @@
 """The viseme and expression tables, and expressive blending of the two.
 
 A *posture* is a vector of muscle activations, one per rig function
-(``rig.names``: 25 muscles then ``jaw``). Seed 002 (§2.2) stores 56 speech
+(``rig.names``: 25 muscles then ``jaw``). Edge & Maddock (2001, §2.2) store 56 speech
 postures (visemes, one per DECtalk phoneme, silence included) and a handful of
 emotions, and makes an expressive speech posture by weighted parameter
 blending, muscle by muscle:
@@ -13,7 +13,7 @@ blending, muscle by muscle:
 
 where :math:`V` is the viseme, :math:`E_e` the emotions with weights
 :math:`w_e \\ge 0`, and :math:`[\\ell_m, u_m]` the muscle's range in the rig
-(seed 002 §2.1.3: each contraction is restricted so summed influences do not
+(Edge & Maddock 2001, §2.1.3: each contraction is restricted so summed influences do not
 disfigure the mask).
 
 The tables are read and validated by :mod:`visemeface.postures.tables` (its
@@ -31,7 +31,7 @@ import pandas as pd
 
 from visemeface.errors import InputError, table_name
 from visemeface.muscles.measure import TARGET_DIMENSIONS  # noqa: F401  (lip-shape target columns, re-exported)
-from visemeface.muscles.rig import SPEECH_FUNCTIONS  # noqa: F401  (seed 002 Table 1, re-exported)
+from visemeface.muscles.rig import SPEECH_FUNCTIONS  # noqa: F401  (Edge & Maddock 2001, Table 1, re-exported)
 from visemeface.postures.tables import (EMOTIONS, _default_rig, _rig_spec, expression_info,  # noqa: F401
                                         expressions_file, load_expressions, load_targets, load_visemes,
                                         targets_file, viseme_info, visemes_file)
@@ -138,7 +138,7 @@ def parse_weights(specs: Iterable[str] | str | None) -> dict[str, float]:
 def blend(viseme: str, emotions: Mapping[str, float] | None = None, w_viseme: float = 1.0, rig=None,
           *, visemes: pd.DataFrame | None = None, expressions: pd.DataFrame | None = None,
           keep_contact: bool = False, library: PostureLibrary | None = None) -> pd.Series:
-    """Expressive speech posture by weighted parameter blending (seed 002 §2.2.1).
+    """Expressive speech posture by weighted parameter blending (Edge & Maddock 2001, §2.2.1).
 
     .. math::
 
@@ -165,7 +165,7 @@ def blend(viseme: str, emotions: Mapping[str, float] | None = None, w_viseme: fl
         For postures whose articulation needs lip contact (bilabials p b m,
         labiodentals f v), close the jaw after blending until the lip opening is
         back to the viseme's own (:func:`keep_lip_contact`): a surprised /m/
-        still closes. Off by default (the seed's plain arithmetic).
+        still closes. Off by default (Leach & Maddock's (2018) plain arithmetic).
 
     Returns
     -------

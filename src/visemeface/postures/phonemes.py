@@ -1,6 +1,6 @@
-"""The DECtalk phoneme inventory, seed 002's perceptual classes, and maps onto it.
+"""The DECtalk phoneme inventory, Edge & Maddock's (2001) perceptual classes, and maps onto it.
 
-Every timed phoneme in visemeface is a DECtalk symbol (DESIGN §5): 56 symbols,
+Every timed phoneme in visemeface is a DECtalk symbol, as in Edge & Maddock (2001): 56 symbols,
 one speech posture (viseme) each, index 0 being silence ``_``.
 
 Silence and pause
@@ -85,7 +85,7 @@ CLOSURE: tuple[str, ...] = tuple(r["symbol"] for r in inventory() if r["place"] 
 #: Phonemes whose lower lip must touch the upper teeth (labiodentals).
 LABIODENTAL: tuple[str, ...] = tuple(r["symbol"] for r in inventory() if r["place"] == "labiodental")
 
-#: Seed 002 Table 2's eight perceptual classes, keyed by the paper's letters a-h.
+#: Edge & Maddock (2001) Table 2's eight perceptual classes, keyed by the paper's letters a-h.
 CLASSES: dict[str, tuple[str, ...]] = {
     r["class"]: tuple(r["phonemes"].split()) for r in _read_rows("classes.csv")}
 #: The paper's example word for each class.

@@ -20,7 +20,7 @@ from visemeface.errors import InputError, close_matches
 from visemeface.muscles.measure import TARGET_DIMENSIONS
 from visemeface.resources import data_path
 
-#: The seven emotions every expression table must provide (seed 002's six + disgust).
+#: The seven emotions every expression table must provide (Edge & Maddock's (2001) six + disgust).
 EMOTIONS: tuple[str, ...] = ("happiness", "sadness", "surprise", "fear", "anger", "contempt", "disgust")
 
 _TARGET_RANGE = (-1.0, 1.0)  # a lip moving by more than a mouth width is a typo

@@ -18,8 +18,8 @@ maximum), a frame is speech when
 and the span runs from the first run of at least :data:`MIN_RUN_S` of speech
 frames to the end of the last such run (0.3 was chosen on the three GRID
 clips: 0.2 let a noise burst of ``bbaf2n`` start its speech 0.36 s early). A
-recording whose peak is less than
-:data:`MIN_DYNAMIC_DB` above its floor (silence, steady hum) holds no speech.
+recording whose peak is below :data:`MIN_PEAK_DBFS` (silence) or less than
+:data:`MIN_DYNAMIC_DB` above its floor (steady hum) holds no speech.
 """
 
 from __future__ import annotations
@@ -44,6 +44,9 @@ VIDEO_SUFFIXES = (".mp4", ".mpg", ".mpeg", ".mov", ".mkv", ".avi", ".webm", ".m4
 #: A recording whose loudest frame is less than this above its noise floor holds no speech (dB):
 #: silence and steady noise or hum stay within 1-3 dB; speech without pauses (cut tight) spans 12 dB or more.
 MIN_DYNAMIC_DB = 8.0
+#: A recording whose loudest 20 ms frame is below this (dB re full scale) is silent, however far above its
+#: floor that is (a refusal read "loudest 112 dB above its floor, speech needs 8" for this reason).
+MIN_PEAK_DBFS = -70.0
 #: Shortest run of loud frames that counts as speech (s): shorter ones are clicks.
 MIN_RUN_S = 0.05
 #: Longest recording read (s).
@@ -203,9 +206,12 @@ def speech_span(samples: np.ndarray, rate: int, where=None) -> tuple[float, floa
     """
     times, level, frame = frame_levels(samples, rate)
     floor, peak = float(np.percentile(level, 10)), float(level.max())
-    if peak < -70 or peak - floor < MIN_DYNAMIC_DB:
-        raise InputError(f"no speech found: the audio is silent or a steady noise (loudest "
-                         f"{peak - floor:.0f} dB above its floor, speech needs {MIN_DYNAMIC_DB:g})", where)
+    if peak < MIN_PEAK_DBFS:                  # the reason given is the one that holds
+        raise InputError(f"no speech found: the audio is silent (its loudest moment is {peak:.0f} dBFS, "
+                         f"speech needs {MIN_PEAK_DBFS:g} dBFS or louder)", where)
+    if peak - floor < MIN_DYNAMIC_DB:
+        raise InputError(f"no speech found: the audio is a steady noise (loudest {peak - floor:.0f} dB above "
+                         f"its floor, speech needs {MIN_DYNAMIC_DB:g})", where)
     loud = level > floor + max(6.0, 0.3 * (peak - floor))
     edges = np.flatnonzero(np.diff(np.r_[0, loud.astype(np.int8), 0]))
     runs = [(a, b) for a, b in zip(edges[::2], edges[1::2])

@@ -28,13 +28,11 @@ by 1 ms).
 
 Emotion tags
 ------------
-``[anger 0.8] I told you [neutral] fine`` -- a tag ``[name weight]``,
-``[name=weight]`` or ``[name]`` (weight 1) sets that emotion's weight from the
-next word on; ``[neutral]`` sets every emotion to 0. The tags are returned as an
-*emotion key track*, the ``emotion_keys`` of the :class:`~visemeface.speech.utterance.Utterance`
-that :func:`text_to_utterance` returns: a DataFrame with columns ``time`` (s),
-``emotion`` (str), ``weight`` (float) in time order (``emotion == "neutral"``
-means all emotions to 0). The timeline ramps between keys smoothly.
+``[anger 0.8] I told you [neutral] fine`` -- a tag ``[name weight]``, ``[name=weight]`` or ``[name]`` (weight 1)
+sets that emotion's weight from the next word on; ``[neutral]`` sets every emotion to 0. The tags are returned
+as an *emotion key track*, the ``emotion_keys`` of the :class:`~visemeface.speech.utterance.Utterance` that
+:func:`text_to_utterance` returns: a DataFrame with columns ``time`` (s), ``emotion`` (str), ``weight`` (float)
+in time order (``emotion == "neutral"`` means all emotions to 0). The timeline ramps between keys smoothly.
 
 Examples
 --------
@@ -59,6 +57,7 @@ import pandas as pd
 from visemeface.errors import InputError
 from visemeface.postures.phonemes import DECTALK, SILENCE, is_vowel, to_dectalk
 from visemeface.resources import data_path
+from visemeface.speech.textsize import MAX_WORD_LETTERS, check_text_size  # noqa: F401  (re-exported)
 
 __all__ = ["DEFAULT_RATE_WPM", "arpabet_to_dectalk", "cmu_pronunciations", "durations", "inherent_duration",
            "letter_to_sound", "money_to_words", "number_to_words", "ordinal_to_words", "punctuation_pause",
@@ -127,8 +126,8 @@ def cmu_pronunciations(words) -> dict[str, list[list[str]]]:
     return found
 
 
-from visemeface.speech.numbers import (  # noqa: E402  (the three spellers re-exported)
-    SPELLED, money_to_words, number_to_words, ordinal_to_words)
+from visemeface.speech.numbers import money_to_words, number_to_words, ordinal_to_words  # noqa: E402,F401
+from visemeface.speech.tokens import line_of, tokens  # noqa: E402
 
 
 # ----------------------------------------------------------------------------- words
@@ -243,70 +242,6 @@ def arpabet_to_dectalk(arpa: list[str]) -> list[tuple[str, int | None]]:
     return out
 
 
-# ----------------------------------------------------------------------------- text
-
-_TAG = re.compile(r"\[([^\[\]]*)\]")
-_TAG_BODY = re.compile(r"^\s*([A-Za-z_][A-Za-z_\-]*)\s*(?:[=:\s]\s*([-+]?(?:\d+\.?\d*|\.\d+)))?\s*$")
-#: Titles before a name, read out (their full stop is no sentence end): "Dr. Smith" is doctor Smith;
-#: those CMUdict reads otherwise (Dr. as drive, St. as street, Prof. not at all); Mr., Mrs., Ms. as it has them.
-TITLES = {"dr": "doctor", "prof": "professor", "st": "saint"}
-_TOKEN = re.compile(r"""
-    (?P<money>[$£€]\s?(?:(?:\d{1,3}(?:,\d{3})+|\d+)(?:\.\d+)?|\.\d+)(?:\s+(?i:thousand|million|billion|trillion)\b)?)
-  | (?P<ordinal>(?:\d{1,3}(?:,\d{3})+|\d+)(?i:(?<=1)(?<!11)st|(?<=2)(?<!12)nd|(?<=3)(?<!13)rd|th)\b)
-  | (?P<number>(?:(?<![\w.])[-−])?(?:\d{1,3}(?:,\d{3})+|\d+)(?:\.\d+)?%?)
-  | (?P<title>\b(?i:Dr|Mr|Mrs|Ms|Prof|St)\.(?=\s*[A-Z]))
-  | (?P<and>&)
-  | (?P<word>[A-Za-z\u00C0-\u024F]+(?:['’][A-Za-z]+)*)
-  | (?P<sentence>\.\.\.|…|[.!?]+)
-  | (?P<clause>[;:])
-  | (?P<comma>[,\u2013\u2014]|\s-\s|--)
-""", re.VERBOSE)
-
-
-def _line_of(text: str, pos: int) -> int:
-    return text.count("\n", 0, pos) + 1
-
-
-def _tokens(text: str, path):
-    """Yield ('word', str, line) / ('pause', kind, line) / ('emotion', (name, w), line)."""
-    pos = 0
-    for m in _TAG.finditer(text):
-        yield from _plain_tokens(text, pos, m.start())
-        body = _TAG_BODY.match(m.group(1))
-        line = _line_of(text, m.start())
-        if not body:
-            raise InputError(f"bad emotion tag {m.group(0)!r}; write [name weight], e.g. [anger 0.8]",
-                             path, line)
-        weight = 1.0 if body.group(2) is None else float(body.group(2))
-        if not (math.isfinite(weight) and 0.0 <= weight <= 1.0):
-            raise InputError(f"emotion weight {body.group(2)} in {m.group(0)!r} is not in 0..1", path, line)
-        yield "emotion", (body.group(1).lower(), weight), line
-        pos = m.end()
-    stray = text.find("[", pos)
-    stray = stray if stray >= 0 else text.find("]", pos)
-    if stray >= 0:
-        raise InputError("unmatched bracket in text", path, _line_of(text, stray))
-    yield from _plain_tokens(text, pos, len(text))
-
-
-def _plain_tokens(text: str, start: int, end: int):
-    for m in _TOKEN.finditer(text, start, end):
-        line = _line_of(text, m.start())
-        kind = m.lastgroup
-        if kind in SPELLED:
-            for w in SPELLED[kind](m.group(0)):
-                yield "word", w, line
-        elif kind == "word":
-            yield "word", m.group(0).replace("’", "'"), line
-        elif kind == "title":
-            title = m.group(0)[:-1].lower()
-            yield "word", TITLES.get(title, title), line
-        elif kind == "and":
-            yield "word", "and", line
-        else:
-            yield "pause", kind, line
-
-
 #: Punctuation marks of DECtalk strings and the phrase breaks they make (``timing.csv``'s pauses).
 _PAUSE_KIND = {",": "comma", ";": "clause", ":": "clause", ".": "sentence", "!": "sentence", "?": "sentence"}
 
@@ -329,7 +264,7 @@ def _phrase_items(text: str, path, warn: bool) -> list[tuple]:
     a pause before the first word is dropped, adjacent pauses merge into the longest.
     """
     items: list[tuple] = []
-    for kind, value, line in _tokens(text, path):
+    for kind, value, line in tokens(text, path):
         if kind == "word":
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
@@ -443,11 +378,12 @@ def text_to_utterance(text: str, rate_wpm: float | None = None, *, path=None, wa
     if not isinstance(text, str):                  # str(None) would be spoken "none"
         raise InputError(f"the text must be a str, got {type(text).__name__}", path)
     text = text.lstrip("\ufeff")
+    check_text_size(text, rate_wpm, path)
     items = _phrase_items(text, path, warn)
     n_words = sum(1 for it in items if it[0] == "word")
     if n_words == 0:
         raise InputError("no words to speak in the text", path,
-                         _line_of(text, len(text)) if path is not None else None)
+                         line_of(text, len(text)) if path is not None else None)
     phones, words, emotion_at, pauses = _klatt_durations(items, t)
     scale = (n_words * 60.0 / rate_wpm) / sum(p[1] for p in phones)
     floor, table = t["default_rate_wpm"] / rate_wpm, durations()
@@ -482,7 +418,10 @@ def text_to_utterance(text: str, rate_wpm: float | None = None, *, path=None, wa
     key_table = pd.DataFrame({"time": pd.Series([k[0] for k in keys], dtype=float),
                               "emotion": pd.Series([k[1] for k in keys], dtype=object),
                               "weight": pd.Series([k[2] for k in keys], dtype=float)})
-    return Utterance(segments, word_table, key_table, source_format="text")
+    from visemeface.speech.stress import with_text_stress        # the phones' stress, *emphasis*
+
+    spoken = [arpabet_to_dectalk(word_to_arpabet(str(w), warn=False)) for w in words]
+    return with_text_stress(Utterance(segments, word_table, key_table, source_format="text"), text, spoken, path)
 
 
 def text_to_segments(text: str, rate_wpm: float | None = None, *, path=None,

@@ -51,7 +51,7 @@ Emotions
 :mod:`visemeface.speech.g2p`; ``neutral`` sets every emotion to 0), or None; a
 key track of an :class:`~visemeface.speech.utterance.Utterance` passed as ``segments`` is applied too. A weight changes by a cosine
 ramp of ``emotion_ramp`` seconds centred on its key. Each frame is then
-(seed 002 §2.2.1)
+(Edge & Maddock 2001, §2.2.1)
 
 .. math:: a(t) = v(t) + \\sum_e w_e(t)\\, E_e ,
 
@@ -84,7 +84,7 @@ __all__ = ["MODES", "activation_track", "dominance_table", "emotion_weights", "l
 MODES = ("coarticulation", "linear", "cosine")
 #: Phonemes whose target is forced at their centre (lip closure / lip-teeth contact).
 FORCED = frozenset(CLOSURE) | frozenset(LABIODENTAL)
-#: Rig functions that open the lips (seed 002 Table 1: jaw rotation, depressor labii lowers the
+#: Rig functions that open the lips (Edge & Maddock 2001, Table 1: jaw rotation, depressor labii lowers the
 #: bottom lip, levator labii superioris raises the upper one): an emotion does not move them
 #: while a p b m f v target is forced, so closure and contact survive e.g. surprise's jaw drop.
 LIP_OPENING = ("jaw", "depressor_labii_inferioris", "levator_labii_superioris")
@@ -102,6 +102,14 @@ def dominance_table() -> pd.DataFrame:
     assert set(DECTALK) <= set(table.index), f"{path} lacks {sorted(set(DECTALK) - set(table.index))}"
     assert (table.to_numpy() > 0).all(), f"{path}: parameters must be positive"
     return table
+
+
+@lru_cache(maxsize=1)
+def _dominance_rows() -> dict[str, np.ndarray]:
+    """Symbol -> (alpha, theta_before, theta_after, c): the table as plain rows (four pandas look-ups per
+    call cost more than the whole coarticulation of a short window, which ``live`` makes 30 times a second)."""
+    dom = dominance_table()
+    return dict(zip(dom.index, dom[["alpha", "theta_before", "theta_after", "c"]].to_numpy(dtype=float)))
 
 
 # ----------------------------------------------------------------------------- checks
@@ -147,11 +155,8 @@ def _held_half_width(start, end, edge):
 
 
 def _coarticulation(times, start, end, phones, targets, edge, chunk=2048):
-    dom = dominance_table()
-    alpha = dom.loc[phones, "alpha"].to_numpy()
-    th_b = dom.loc[phones, "theta_before"].to_numpy()
-    th_a = dom.loc[phones, "theta_after"].to_numpy()
-    cexp = dom.loc[phones, "c"].to_numpy()
+    rows = _dominance_rows()
+    alpha, th_b, th_a, cexp = np.array([rows[p] for p in phones], dtype=float).reshape(-1, 4).T
     centre = (start + end) / 2
     half = _held_half_width(start, end, edge)
     # Segments farther than `reach` contribute < 1e-7 of the nearest: skip them.
@@ -255,14 +260,22 @@ def _blend(segments, fps, mode, edge, targets_of):
     return times, values, columns, strength
 
 
-def _speech(segments, visemes, fps, mode, edge):
-    return _blend(segments, fps, mode, edge, lambda phones: _viseme_matrix(visemes, phones))
+def _speech(segments, visemes, fps, mode, edge, jali=None):
+    def targets_of(phones):
+        targets, columns = _viseme_matrix(visemes, phones)
+        if jali is not None:
+            from visemeface.speech.articulation import articulate
+
+            targets = articulate(targets, columns, phones, *jali)
+        return targets, columns
+    return _blend(segments, fps, mode, edge, targets_of)
 
 
 def speech_track(segments: pd.DataFrame, visemes: pd.DataFrame, fps: float = 30.0,
-                 mode: str = "coarticulation", edge: float = 0.06) -> pd.DataFrame:
-    """The viseme part of the track (no emotion, no clamping); see the module doc."""
-    times, values, columns, _ = _speech(segments, visemes, fps, mode, edge)
+                 mode: str = "coarticulation", edge: float = 0.06, jali=None) -> pd.DataFrame:
+    """The viseme part of the track (no emotion, no clamping); see the module doc (``jali`` as
+    :func:`activation_track`'s)."""
+    times, values, columns, _ = _speech(segments, visemes, fps, mode, edge, jali)
     return make_track(times, values, columns, fps)
 
 
@@ -369,7 +382,7 @@ def _add_emotions(times, values, columns, contact_strength, base, key_track, exp
     known = [str(i) for i in expr.index]
     for n in names:
         if n not in known:
-            raise InputError(f"unknown emotion {n!r}{close_matches(n, known)}")
+            raise InputError(f"unknown emotion {n!r}{close_matches(n, known) or '; known: ' + ', '.join(known)}")
     if key_track is not None:
         for _, row in key_track.iterrows():
             if str(row["emotion"]) != "neutral":
@@ -393,7 +406,7 @@ def _add_emotions(times, values, columns, contact_strength, base, key_track, exp
 def activation_track(segments: pd.DataFrame, visemes: pd.DataFrame, fps: float = 30.0,
                      mode: str = "coarticulation", emotions=None, expressions: pd.DataFrame | None = None,
                      ranges: Mapping[str, tuple[float, float]] | None = None, edge: float = 0.06,
-                     emotion_ramp: float = 0.3) -> pd.DataFrame:
+                     emotion_ramp: float = 0.3, jali=None) -> pd.DataFrame:
     """Muscle activations per frame for timed phonemes (see the module doc).
 
     Parameters
@@ -418,6 +431,9 @@ def activation_track(segments: pd.DataFrame, visemes: pd.DataFrame, fps: float =
         Ramp (s) at each end of a held segment.
     emotion_ramp : float
         Duration (s) of an emotion change.
+    jali : (ja, li) arrays, optional
+        Per-segment jaw and lip factors (:mod:`visemeface.speech.articulation`) applied to each
+        segment's target before the blend; None: the tabled targets.
 
     Returns
     -------
@@ -445,7 +461,7 @@ def activation_track(segments: pd.DataFrame, visemes: pd.DataFrame, fps: float =
     if isinstance(segments, Utterance):
         keys.append(_keys_frame(segments.emotion_keys))
         segments = segments.segments
-    times, values, columns, contact_strength = _speech(segments, visemes, fps, mode, edge)
+    times, values, columns, contact_strength = _speech(segments, visemes, fps, mode, edge, jali)
     base: dict[str, float] = {}
     if isinstance(emotions, Mapping):
         base = {str(k): _check_weight(k, v) for k, v in emotions.items()}

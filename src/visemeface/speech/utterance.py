@@ -26,6 +26,11 @@ def no_emotion_keys() -> pd.DataFrame:
                          "weight": pd.Series(dtype=float)})
 
 
+def no_stress() -> pd.DataFrame:
+    """An empty stress table (``stress``, ``emphasis``): the stress of the phones is unknown."""
+    return pd.DataFrame({"stress": pd.Series(dtype=float), "emphasis": pd.Series(dtype=bool)})
+
+
 @dataclass(frozen=True)
 class Utterance:
     """An utterance ready to animate.
@@ -42,12 +47,18 @@ class Utterance:
         :func:`visemeface.speech.timeline.activation_track`; empty if none.
     source_format : str
         The transcript format it was read from (``"text"`` for English text).
+    stress : DataFrame
+        One row per segment: ``stress`` the CMUdict stress digit of a vowel (0 unstressed, 1 primary,
+        2 secondary; NaN for consonants and silences) and ``emphasis`` (the phone is in a word the
+        text emphasised, ``*word*``); empty where unknown (transcripts, recordings). Played by
+        :mod:`visemeface.speech.articulation` and :mod:`visemeface.speech.gestures` without a recording.
     """
 
     segments: Segments
     words: pd.DataFrame = field(default_factory=no_words)
     emotion_keys: pd.DataFrame = field(default_factory=no_emotion_keys)
     source_format: str = ""
+    stress: pd.DataFrame = field(default_factory=no_stress)
 
     @classmethod
     def of(cls, value, what: str = "an utterance") -> Utterance:
@@ -76,9 +87,20 @@ class Utterance:
         if seconds <= self.end:
             return self
         seg = self.segments.copy()
+        stress = self.stress
         if len(seg) and seg["phoneme"].iloc[-1] == SILENCE:
             seg.loc[seg.index[-1], "end"] = float(seconds)
         else:
             row = pd.DataFrame({"start": [self.end], "end": [float(seconds)], "phoneme": [SILENCE]})
             seg = pd.concat([seg, row], ignore_index=True)
-        return replace(self, segments=seg)
+            if len(stress):
+                stress = pd.concat([stress, pd.DataFrame({"stress": [float("nan")], "emphasis": [False]})],
+                                   ignore_index=True)
+        return replace(self, segments=seg, stress=stress)
+
+    def phone_stress(self):
+        """(stress, emphasis) arrays, one value per segment, or None where the stress is unknown."""
+        if len(self.stress) != len(self.segments) or len(self.stress) == 0:
+            return None
+        return (self.stress["stress"].to_numpy(dtype=float),
+                self.stress["emphasis"].to_numpy(dtype=bool))

@@ -11,7 +11,9 @@ suffix    format        content
 ``.txt``  ``timed``     ``start end phone`` lines (s), ``#`` header comment
 ``.lab``  ``lab``       HTK labels ``start end phone`` in 100 ns units
 ``.TextGrid`` ``textgrid``  Praat long TextGrid, tiers ``words`` (if any) and ``phones``; silence is empty
-``.json`` ``mfa-json``  Montreal Forced Aligner JSON, tiers ``words`` and ``phones``
+``.json`` ``mfa-json``  Montreal Forced Aligner JSON, tiers ``words`` and ``phones``; an aligned
+                        text adds ``word_confidence``: per word ``word``, ``start``, ``end``,
+                        ``confidence`` (0..1, below 0.5 doubtful) and ``margin``
 ========  ============  ======================================================
 
 Phones are DECtalk symbols (the project's own). A reader that guesses the
@@ -99,10 +101,28 @@ def _fill(entries, end):
     return out
 
 
+def _word_confidence(u: Utterance) -> list[dict]:
+    """Each aligned word's confidence and margin (:mod:`visemeface.speech.align`); null where not judged."""
+    import math
+
+    if "confidence" not in u.words:
+        return []
+
+    def number(value):
+        return None if value is None or not math.isfinite(float(value)) else round(float(value), 4)
+
+    return [{"word": str(w), "start": float(s), "end": float(e), "confidence": number(c), "margin": number(m)}
+            for s, e, w, c, m in u.words[["start", "end", "word", "confidence", "margin"]].itertuples(index=False)]
+
+
 def _mfa_json(u: Utterance) -> str:
     tiers = {name: {"type": "interval", "entries": [[s, e, label] for s, e, label in entries]}
              for name, entries in _tiers(u).items()}
-    return json.dumps({"start": 0.0, "end": u.end, "tiers": tiers}, indent=1) + "\n"
+    data = {"start": 0.0, "end": u.end, "tiers": tiers}
+    confidence = _word_confidence(u)
+    if confidence:
+        data["word_confidence"] = confidence
+    return json.dumps(data, indent=1) + "\n"
 
 
 #: Format name -> function(Utterance) -> text.

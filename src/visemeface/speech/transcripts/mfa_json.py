@@ -6,7 +6,6 @@ MFA leaves the final silence out, so an ``end`` beyond the last entry becomes si
 
 from __future__ import annotations
 
-import json
 import math
 
 from visemeface.errors import InputError
@@ -33,10 +32,9 @@ def _entries(data, tier, where):
 
 
 def parse(text, where, tier=None, **_) -> list[Row]:
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InputError(f"not valid JSON: {exc.msg}", where, exc.lineno) from None
+    from visemeface.textfile import parse_json
+
+    data = parse_json(text, where)
     if not isinstance(data, dict) or "tiers" not in data:
         raise InputError("JSON has no 'tiers': not MFA output", where, 1)
     name, entries = _entries(data, tier, where)

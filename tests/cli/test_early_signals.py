@@ -1,0 +1,129 @@
+"""Ctrl-C or SIGTERM at any moment of any sub-command: exit 130, the one line "visemeface: interrupted",
+nothing half written. Before, a signal in the first seconds (imports and parsing, before the handler
+existed) printed a 30-67 line KeyboardInterrupt traceback (SIGINT) or killed the process (SIGTERM, rc -15).
+
+The moments are measured from the launch, but never earlier than twice the time this machine takes to
+start the interpreter and import the entry module (``python -c "import visemeface.cli"``): before that no
+code of the package has run yet, and no program can handle a signal there.
+"""
+
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from visemeface.resources import transcripts_path
+
+#: Launches of every sub-command, each given what it needs to run for a while (or finish).
+COMMANDS = {
+    "face": ["face", "-o", "out.png"],
+    "pose": ["pose", "aa", "-o", "out.png"],
+    "speak": ["speak", "{transcript}", "-o", "out.mp4", "--size", "64", "-q"],
+    "muscles": ["muscles"],
+    "say": ["say", "hello there", "-o", "out.mp4", "--size", "64", "-q"],
+    "lipsync": ["lipsync", "{recording}", "-o", "out.lab"],
+    "preview": ["preview", "a.glb", "-o", "out.html"],
+    "visemes": ["visemes"],
+    "emotions": ["emotions"],
+    "sheet": ["sheet", "-o", "out.png", "--size", "64"],
+    "simulate": ["simulate", "part", "--resolution", "800", "--size", "32", "--msaa", "0", "-o", "out.mp4", "-q"],
+    "batch": ["batch", "jobs.csv", "-o", "out", "--size", "32", "--workers", "1", "-q"],
+    "analyze": ["analyze", "frames", "--box", "8,12,16,8", "-o", "out.csv", "-q"],
+    "compare": ["compare", "a.csv", "a.csv"],
+}
+
+
+def _inputs(work):
+    from visemeface.export.images import write_png
+
+    (work / "frames").mkdir()
+    rng = np.random.default_rng(0)
+    for i in range(40):
+        write_png(work / "frames" / f"f{i:03d}.png", rng.integers(0, 255, (32, 32, 3), dtype=np.uint8))
+    (work / "jobs.csv").write_text("clip,text\na,hello there\nb,bob moves five boats\n")
+    from visemeface.export.gltf import write_morph_animation_glb
+
+    tri = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    write_morph_animation_glb(work / "a.glb", tri, [[0, 1, 2]], tri[None] * 0.1, ["m"], [0.0, 1.0], [[0.0], [1.0]])
+    (work / "a.csv").write_text("frame,time,count,area,width,height\n" +
+                                "".join(f"{i},{i / 30:.4f},1,{0.01 * (i % 5)},{0.1 * (i % 3)},{0.05 * (i % 4)}\n"
+                                        for i in range(60)))
+    return {p.name for p in work.iterdir()}
+
+
+@pytest.fixture(scope="module")
+def startup(startup_s):
+    """Twice the slowest of three starts of the interpreter importing the entry module, on this machine."""
+    return 2 * startup_s
+
+
+def _interrupt(work, command, at, sig):
+    argv = [a.format(transcript=transcripts_path("bob_moves_five_boats.txt"),
+                     recording=transcripts_path("set_white_with_p_two_soon.wav")) for a in COMMANDS[command]]
+    proc = subprocess.Popen([sys.executable, "-m", "visemeface", *argv], cwd=work, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True)
+    time.sleep(at)
+    done_before = proc.poll() is not None
+    if not done_before:
+        proc.send_signal(sig)
+    try:
+        _, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    return done_before, proc.returncode, err
+
+
+def _check(work, inputs, command, at, sig):
+    done_before, rc, err = _interrupt(work, command, at, sig)
+    where = f"{command} {sig.name} at {at:.2f} s"
+    if done_before or rc == 0:   # it finished first, or the signal came as it was ending: a whole, normal run
+        assert rc == 0, f"{where}: finished with {rc}: {err}"
+        import shutil
+
+        for name in {p.name for p in work.iterdir()} - inputs:      # the next launch starts afresh
+            shutil.rmtree(work / name) if (work / name).is_dir() else (work / name).unlink()
+        return
+    # the interrupt adds one line (after any progress line the command had printed), no traceback
+    lines = err.splitlines()
+    assert rc == 130 and lines[-1:] == ["visemeface: interrupted"], f"{where}: rc {rc}, stderr:\n{err}"
+    assert all(line.startswith("visemeface: ") for line in lines), f"{where}: stderr:\n{err}"
+    left = {p.name for p in work.iterdir()} - inputs
+    # only what --resume continues from (a checkpoint, a folder of frames in progress, a batch folder whose
+    # report lists what is not made yet), no finished-looking output
+    assert all(n.endswith((".checkpoint", ".partial")) or _resumable_batch(work / n) for n in left), \
+        f"{where}: left {sorted(left)}"
+    for name in left:
+        import shutil
+
+        shutil.rmtree(work / name)
+
+
+def _resumable_batch(folder):
+    """A batch folder stopped part way: its report says which clips are made (each a folder) and which not."""
+    from visemeface.batch import REPORT, read_report
+
+    if not (folder / REPORT).is_file():
+        return False
+    rows = read_report(folder / REPORT)
+    made = {r["clip"] for r in rows if r["status"] == "done"}
+    return (all(r["status"] == "done" or "interrupted" in r["error"] for r in rows)
+            and made <= {p.name for p in folder.iterdir() if p.is_dir()})
+
+
+def test_an_early_ctrl_c_or_sigterm_is_one_line_and_130(tmp_path, startup):
+    inputs = _inputs(tmp_path)
+    for at in (startup, 0.5):
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            _check(tmp_path, inputs, "visemes", at, sig)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("command", sorted(COMMANDS))
+def test_a_signal_at_any_early_moment_of_any_command_is_one_line_and_130(tmp_path, startup, command):
+    inputs = _inputs(tmp_path)
+    for at in (0.1, 0.5, 1.0, 2.0):
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            _check(tmp_path, inputs, command, max(at, startup), sig)

@@ -1,0 +1,89 @@
+"""The default face's eyes at rest look like a person's: lids over the iris, no stare."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+SIZE = 512
+
+
+@pytest.fixture(scope="module")
+def rig():
+    from visemeface.muscles.rig import default_rig
+
+    return default_rig()
+
+
+@pytest.fixture(scope="module")
+def front(rig):
+    from visemeface.render.renderer import Renderer
+
+    r = Renderer(rig.face, size=SIZE, view="face")
+    yield r
+    r.release()
+
+
+def _sclera(img):
+    """Pixels of the eye white: bright and nearly grey (the skin is bright but warm)."""
+    f = img.astype(float)
+    return (f.mean(axis=2) > 140) & (f.max(axis=2) - f.min(axis=2) < 45)
+
+
+def _eye(front, face, side):
+    """(u, v) of the pupil in pixels and pixels per metre at the eye."""
+    c = face.landmark_position(f"eye_centre_{side}")
+    (u, v), (u2, _) = front.project(np.stack([c, c + [0.01, 0.0, 0.0]]))
+    return u, v, (u2 - u) / 0.01
+
+
+def _sclera_above_iris(front, face, vertices):
+    """Eye-white pixels over the top of each iris (the middle half of its width), both eyes."""
+    from visemeface.face.shape import _IRIS_R
+
+    img = front.render(vertices)
+    white = _sclera(img)
+    count = 0
+    for side in ("left", "right"):
+        u, v, k = _eye(front, face, side)
+        r = _IRIS_R * k
+        band = white[int(v - 1.8 * r):int(v - 0.8 * r), int(u - 0.5 * r):int(u + 0.5 * r) + 1]
+        count += int(band.sum())
+    return count
+
+
+def test_no_sclera_above_the_iris_at_rest_but_with_au5(rig, front):
+    face = rig.face
+    assert _sclera_above_iris(front, face, face.vertices) == 0
+    # the measure can fail: the upper lid raised (AU5, the stare) bares the white above the iris
+    wide = rig.pose({"upper_lid_raise_left": 1.0, "upper_lid_raise_right": 1.0})
+    assert _sclera_above_iris(front, face, wide) > 10
+
+
+def test_iris_is_an_adults_and_the_lids_sit_on_it(rig, front):
+    face = rig.face
+    img = front.render()
+    white = _sclera(img)
+    for side in ("left", "right"):
+        u, v, k = _eye(front, face, side)
+        row = white[int(round(v))]
+        right = next(i for i in range(int(u), SIZE) if row[i])
+        left = next(i for i in range(int(u), 0, -1) if row[i])
+        assert 11.0e-3 < (right - left - 1) / k < 12.5e-3          # iris 11.5-12 mm across
+        eye = face.landmark_position(f"eye_centre_{side}")
+        near = lambda idx: idx[np.abs(face.vertices[idx, 0] - eye[0]) < 0.002]      # noqa: E731
+        up, lo = near(face.regions["upper_lids"]), near(face.regions["lower_lids"])
+        top = face.vertices[up, 1].min() - eye[1]
+        bottom = face.vertices[lo, 1].max() - eye[1]
+        iris_r = 0.5 * (right - left - 1) / k
+        assert 1.0e-3 < iris_r - top < 2.0e-3                      # the upper lid covers 1-2 mm of the iris
+        assert abs(bottom + iris_r) < 0.6e-3                       # the lower lid at its lower edge
+
+
+def test_a_wet_highlight_on_each_cornea(rig, front):
+    img = front.render().astype(float)
+    for side in ("left", "right"):
+        u, v, k = _eye(front, rig.face, side)
+        r = int(0.006 * k)
+        patch = img[int(v) - r:int(v) + 1, int(u) - r // 2:int(u) + r // 2 + 1].mean(axis=2)
+        assert patch.max() > 200 and patch.min() < 40              # a bright spot on the dark iris/pupil

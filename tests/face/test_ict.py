@@ -1,0 +1,135 @@
+"""The built-in ICT head: regions found from its landmarks and connectivity, and the rig fixes a real head needs
+(the jaw off the neck, muscles off the scalp), measured on the head itself."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from visemeface.errors import InputError
+from visemeface.face import builtin_face
+from visemeface.face.ict import N_IDENTITY_MODES, ict_face, identity_weights, parts
+
+
+@pytest.fixture(scope="module")
+def ict_rig():
+    from visemeface.muscles.rig import MuscleRig
+
+    return MuscleRig.from_file(ict_face())
+
+
+def test_the_head_has_the_conventions_landmarks_and_regions(ict_rig):
+    from visemeface.face.mesh import LANDMARK_NAMES
+
+    face = ict_rig.face
+    assert set(LANDMARK_NAMES) <= set(face.landmarks)
+    up, lo = face.regions["upper_lip"], face.regions["lower_lip"]
+    assert len(up) > 100 and len(lo) > 100 and not np.intersect1d(up, lo).size
+    V = face.vertices
+    # the lips lie each on its side of the mouth at the centre line, and the seams run corner to corner
+    centre = np.abs(V[:, 0]) < 0.004
+    assert V[np.intersect1d(up, np.flatnonzero(centre)), 1].min() > V[np.intersect1d(lo, np.flatnonzero(centre)), 1].max() - 1e-3
+    for seam in ("lip_seam_upper", "lip_seam_lower"):
+        x = V[face.regions[seam], 0]
+        assert x.min() < -0.02 and x.max() > 0.02
+    w = np.linalg.norm(face.landmark_position("mouth_corner_left") - face.landmark_position("mouth_corner_right"))
+    assert 0.045 < w < 0.055                          # metres (ICT ships centimetres)
+    assert np.allclose(0.5 * (face.landmark_position("mouth_corner_left")
+                              + face.landmark_position("mouth_corner_right")), 0.0, atol=1e-9)
+
+
+def test_the_jaw_leaves_the_neck_and_the_nape(ict_rig):
+    """ICT's own jawOpen moves the neck at most 11.7 mm; without the fade past the chin our jaw turned the
+    whole neck (32 mm at jaw 1)."""
+    face = ict_rig.face
+    a = np.zeros(len(ict_rig.names))
+    a[ict_rig.index["jaw"]] = 1.0
+    d = np.linalg.norm(ict_rig.displacement(a), axis=1)
+    neck = parts()["head_and_neck"]
+    assert d[neck].max() < 3e-3
+    assert d[face.landmarks["lower_lip_mid"]] > 8e-3            # while the mouth opens
+    assert d[face.landmarks["chin"]] > 5e-3                     # and the chin goes with it
+
+
+def test_no_emotion_dents_the_scalp(ict_rig):
+    from visemeface.postures.library import PostureLibrary
+
+    face, V = ict_rig.face, ict_rig.face.vertices
+    scalp = np.union1d(parts()["head_and_neck"],
+                       np.flatnonzero(V[:, 1] > face.landmark_position("brow_inner_left")[1] + 0.06))
+    lib = PostureLibrary(ict_rig)
+    for name in lib.expressions.index:
+        a = lib.expressions.loc[name].reindex(ict_rig.names, fill_value=0.0).to_numpy(float)
+        assert np.linalg.norm(ict_rig.displacement(a), axis=1)[scalp].max() < 1e-3, name
+
+
+def test_a_blink_brings_the_upper_lid_down_to_the_lower(ict_rig):
+    face = ict_rig.face
+    a = np.zeros(len(ict_rig.names))
+    for side in ("left", "right"):
+        a[ict_rig.index[f"upper_lid_close_{side}"]] = 1.0
+    v = ict_rig.pose(a)
+    up, lo = face.regions["upper_lids"], face.regions["lower_lids"]
+    for sign in (1, -1):                               # each eye: the upper lid's lowest point meets the lower lid
+        u, low = up[np.sign(face.vertices[up, 0]) == sign], lo[np.sign(face.vertices[lo, 0]) == sign]
+        rest_gap = face.vertices[low, 1].max() - face.vertices[u, 1].min()
+        assert v[u, 1].min() <= v[low, 1].max() + 0.25 * abs(rest_gap) + 1e-3
+
+
+def test_identity_is_deterministic_bounded_and_distinct():
+    assert identity_weights(5) == identity_weights("5")
+    assert len(identity_weights(5)) == N_IDENTITY_MODES and max(map(abs, identity_weights(5))) <= 3.0
+    assert identity_weights("0.5,-1") == (0.5, -1.0)
+    a, b = ict_face(identity_weights(1)), ict_face(identity_weights(2))
+    assert np.abs(a.vertices - b.vertices).max() > 2e-3
+    assert np.array_equal(a.vertices, ict_face(identity_weights(1)).vertices)
+    for bad in ("4,nan", "x", "-3"):
+        with pytest.raises(InputError, match="identity"):
+            identity_weights(bad)
+    with pytest.raises(InputError, match="outside"):
+        identity_weights("0,5")
+    with pytest.raises(InputError, match="--face ict"):
+        builtin_face("procedural", identity=3)
+
+
+def test_the_face_view_frames_a_whole_head_by_its_face():
+    from visemeface.render.renderer import Renderer
+
+    from visemeface.face.procedural import default_face
+
+    with Renderer(ict_face(), size=(128, 128), view="face") as r:
+        ict_mouth = r.mouth_box()[2]
+    with Renderer(default_face(), size=(128, 128), view="face") as r:
+        our_mouth = r.mouth_box()[2]
+    # the mouth is as large in the frame as on the default face (framed whole, head, neck and shoulders, it
+    # was 18 px of 128 against 26)
+    assert ict_mouth >= 0.9 * our_mouth
+
+
+def test_pose_speaks_on_the_ict_face_from_the_command_line(tmp_path):
+    p = subprocess.run([sys.executable, "-m", "visemeface", "pose", "m", "--face", "ict", "--identity", "3",
+                        "--size", "128", "-o", "m.png"], cwd=tmp_path, capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    assert (tmp_path / "m.png").stat().st_size > 1000
+    p = subprocess.run([sys.executable, "-m", "visemeface", "pose", "m", "--identity", "3", "-o", "n.png"],
+                       cwd=tmp_path, capture_output=True, text=True)
+    assert p.returncode == 2 and "--identity needs --face ict" in p.stderr and not (tmp_path / "n.png").exists()
+
+
+def test_a_manifest_gives_each_clip_an_identity_of_the_ict_head(tmp_path):
+    from visemeface.batch.manifest import BadRow, read_manifest
+
+    jobs = tmp_path / "jobs.csv"
+    jobs.write_text("clip,text,identity\na,bob,1\nb,bob,0.5;-1\nc,bob,\nd,bob,7;nan\n")
+    rows = read_manifest(jobs, {"face": "ict"})
+    assert [getattr(r, "identity", None) for r in rows[:3]] == ["1", "0.5;-1", None]
+    assert isinstance(rows[3], BadRow) and "identity" in rows[3].error
+    rows = read_manifest(jobs, {})
+    assert isinstance(rows[0], BadRow) and "--face ict" in rows[0].error
+    from visemeface.batch.clip import _rig
+
+    a, b = _rig("ict", None, None, "1"), _rig("ict", None, None, "2")
+    assert np.abs(a.face.vertices - b.face.vertices).max() > 2e-3
