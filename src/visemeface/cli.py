@@ -165,9 +165,15 @@ def _main(argv, armed: bool):
         _take_signals(_raise_interrupt)
     try:
         return int(args.func(args) or 0)
-    except VisemefaceError as exc:
+    except (VisemefaceError, ModuleNotFoundError) as exc:
         if _received:                       # an error the interrupt came out as: report the interrupt
             raise KeyboardInterrupt from None
+        if not isinstance(exc, VisemefaceError):    # a library of an optional extra that is not installed
+            from visemeface.errors import missing_extra
+
+            exc = missing_extra(exc) or exc
+            if not isinstance(exc, VisemefaceError):
+                raise
         print(f"visemeface: error: {exc}", file=sys.stderr)
         return exit_status(exc)
     except BrokenPipeError:

@@ -65,6 +65,57 @@ class RenderUnavailable(VisemefaceError, RuntimeError):
     """No headless OpenGL (EGL) context could be made on this machine."""
 
 
+#: The modules an optional extra brings, by the distribution that installs them (where the names differ).
+DISTRIBUTIONS = {"cv2": "opencv-python-headless", "PIL": "pillow", "distributed": "dask",
+                 "imageio_ffmpeg": "imageio-ffmpeg", "ai_edge_litert": "ai-edge-litert",
+                 "espeakng_loader": "espeakng-loader"}
+
+
+class MissingExtra(VisemefaceError, ImportError):
+    """A command needs a library of an optional extra that is not installed. CLI exit status 2.
+
+    ``module`` is the missing module, ``extras`` the extras that install it (from the package's own
+    metadata), ``command`` the ``pip install`` line that adds the first of them.
+    """
+
+    def __init__(self, module: str, extras: list[str]):
+        self.module, self.extras = module, list(extras)
+        distribution = DISTRIBUTIONS.get(module, module)
+        which = self.extras[0] if self.extras else None
+        self.command = f'pip install "visemeface[{which}]"' if which else f"pip install {distribution}"
+        named = " or ".join(f"[{e}]" for e in self.extras)
+        extra = f"the {named} extra" if which else "a library visemeface does not install"
+        needs = module if distribution == module else f"{module} ({distribution})"
+        super().__init__(f"this needs {needs}, from {extra}, which is not installed: {self.command}")
+
+
+def extras_providing(distribution: str) -> list[str]:
+    """The optional extras of the installed visemeface that require ``distribution``, in declared order."""
+    import re
+    from importlib import metadata
+
+    try:
+        requires = metadata.requires("visemeface") or []
+    except metadata.PackageNotFoundError:
+        return []
+    key = re.sub(r"[-_.]+", "-", distribution).lower()
+    found = []
+    for line in requires:              # in the order pyproject.toml declares the extras
+        m = re.match(r"\s*([A-Za-z0-9_.-]+)[^;]*;\s*extra\s*==\s*[\"']([^\"']+)[\"']", line)
+        if m and re.sub(r"[-_.]+", "-", m.group(1)).lower() == key and m.group(2) not in found:
+            found.append(m.group(2))
+    return [e for e in found if e not in ("all", "test")]
+
+
+def missing_extra(exc: BaseException) -> MissingExtra | None:
+    """``exc`` as a :class:`MissingExtra` when it is an import of an optional extra's library, else None."""
+    if not isinstance(exc, ModuleNotFoundError) or not exc.name:
+        return None
+    module = exc.name.split(".")[0]
+    extras = extras_providing(DISTRIBUTIONS.get(module, module))
+    return MissingExtra(module, extras) if extras else None
+
+
 #: Exit statuses of the command line (README "Exit statuses").
 EXIT = {"done": 0, "input": 2, "diverged": 3, "interrupted": 130}
 

@@ -91,7 +91,10 @@ def threading_layer() -> str:
     chosen = os.environ.get("NUMBA_THREADING_LAYER")
     if chosen:
         return chosen
-    spec = importlib.util.find_spec("numba")
+    try:
+        spec = importlib.util.find_spec("numba")
+    except ImportError:                     # not installed (the [physics] and [render] extras bring it)
+        spec = None
     folders = list(spec.submodule_search_locations or []) if spec is not None else []
     pools = [p for f in folders for p in (Path(f) / "np" / "ufunc").glob("omppool*.so")]
     for pool in pools:

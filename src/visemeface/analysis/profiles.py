@@ -23,14 +23,17 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
-from visemeface.analysis.openings import MouthBox, OpeningDetector, Openings
 from visemeface.errors import InputError
 from visemeface.outputs import atomic_output
 from visemeface.track import even_step
+
+if TYPE_CHECKING:   # the detectors need OpenCV (the [render] extra); reading and comparing profiles does not
+    from visemeface.analysis.openings import MouthBox, OpeningDetector, Openings
 
 COLUMNS = ("frame", "time", "count", "area", "width", "height", "d_area", "d_width")
 METRICS = ("area", "width", "height")
@@ -90,6 +93,8 @@ def analyze_frames(frames: Iterable[np.ndarray], box, fps: float, detector: Open
     on_frame : callable(index, frame, openings), optional
         Called after each frame (e.g. to write an overlay).
     """
+    from visemeface.analysis.openings import OpeningDetector
+
     detector = detector or OpeningDetector()
     boxes = per_frame_boxes(box)
     found = []
@@ -126,6 +131,8 @@ def analyze_source(source, box=None, detector: OpeningDetector | None = None,
         from visemeface.analysis.video import open_frames
 
         source = open_frames(source)
+
+    from visemeface.analysis.openings import OpeningDetector
 
     detector = detector or OpeningDetector()
     from visemeface.analysis import landmarks
@@ -188,6 +195,8 @@ class _Repeat:
 
 def per_frame_boxes(box):
     """An indexable of boxes, one per frame, from one box or a sequence of boxes."""
+    from visemeface.analysis.openings import MouthBox
+
     if isinstance(box, MouthBox):
         return _Repeat(box)
     seq = list(box)
