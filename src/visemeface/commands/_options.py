@@ -215,6 +215,7 @@ def add_physics_arguments(p: argparse.ArgumentParser, default: str, choices: tup
                    help="sticky: the FEM face with saliva that glues the lips until it breaks; elastic: the same "
                    "FEM without glue" + ("; none: the kinematic rig" if "none" in choices else "")
                    + " (the FEM costs about 8 s per second of speech on 2 cores)")
+    from visemeface.physics.config import MAX_SEAM_ELEMENTS
     from visemeface.physics.glue import MAX_GLUE
 
     g.add_argument("--lips", choices=LIPS, default=LIPS[0],
@@ -222,6 +223,9 @@ def add_physics_arguments(p: argparse.ArgumentParser, default: str, choices: tup
                    "the corners, a stiffening tissue); seed: Leach & Maddock's (2018) model, the same as "
                    "--seam-elements 0 --rupture-time 0 --no-film-corners --tissue-limit inf. The options below "
                    "change either")
+    g.add_argument("--physics-config", type=Path, metavar="FILE.toml", help="the physical face's other "
+                   "parameters (damping, hourglass control, saliva moisture and decay, ...), read over --lips; "
+                   "the options here win over it (the keys: docs/formats/physics-config.md)")
     g.add_argument("--glue", type=number(0, MAX_GLUE), metavar="G",
                    help=f"glue strength K_glue, 0 to {MAX_GLUE:g} (default 0.08)")
     g.add_argument("--glue-profile", metavar="SPEC", help="glue across the mouth over --glue, e.g. "
@@ -251,9 +255,6 @@ def add_physics_arguments(p: argparse.ArgumentParser, default: str, choices: tup
 LIPS = ("default", "seed")
 
 
-#: Most tissue elements along the lip seam ``--seam-elements`` takes (the default face at 96: 6,848 hexahedra
-#: against 4,176 at 48, and a run 2.1x as long; far more is a mistyped number more often than a wish).
-MAX_SEAM_ELEMENTS = 192
 
 
 #: Options of the glue alone: the elastic face is the sticky one with no glue (``--physics elastic`` refuses them).
@@ -261,14 +262,21 @@ GLUE_OPTIONS = ("glue", "glue_profile", "glue_file", "moisture", "evaporation", 
 
 
 def physics_from_args(args, **more):
-    """:class:`PhysicsSettings` of the options (checked), or None for ``--physics none``."""
+    """:class:`PhysicsSettings` of the options (checked), or None for ``--physics none``.
+
+    ``more``: the command's own settings (``dt``, ``damping``, ...); None is "not given" (the file's or the lips').
+    """
     from visemeface.errors import InputError
+
+    more = {k: v for k, v in more.items() if v is not None}
 
     given = [f"--{'no-' if getattr(args, n) is False else ''}{n.replace('_', '-')}"       # as typed
              for n in ("glue", "glue_profile", "moisture", "evaporation", "rupture_time", "seam_elements",
                        "film_corners", "tissue_limit") if getattr(args, n, None) is not None]
     if getattr(args, "lips", "default") != "default":
         given.append(f"--lips {args.lips}")
+    if getattr(args, "physics_config", None) is not None:
+        given.append("--physics-config")
     if args.physics == "none":
         if given:
             raise InputError(f"{given[0]} needs --physics sticky or elastic")
@@ -278,8 +286,20 @@ def physics_from_args(args, **more):
         if glue:
             raise InputError(f"{glue[0]} sets the glue between the lips, which --physics elastic leaves out; "
                              "use --physics sticky")
+    from visemeface.physics.config import MAX_SEAM_ELEMENTS, apply_physics_config, read_physics_config
     from visemeface.physics.drive import PhysicsSettings
 
+    base = PhysicsSettings() if getattr(args, "lips", "default") == "seed" else PhysicsSettings.speech()
+    if getattr(args, "physics_config", None) is not None:
+        values = read_physics_config(args.physics_config)
+        glue = [k for k in values if k in GLUE_OPTIONS or k == "initial_moisture"]
+        if args.physics == "elastic" and glue:
+            raise InputError(f"{glue[0]} sets the glue between the lips, which --physics elastic leaves out; "
+                             "use --physics sticky", args.physics_config)
+        try:
+            base = apply_physics_config(base, values)
+        except InputError as exc:                      # a check of the model's own (a decay of 1 and the like)
+            raise InputError(str(exc), args.physics_config) from None
     params = {}
     if args.moisture is not None:
         params["initial_moisture"] = args.moisture
@@ -304,14 +324,15 @@ def physics_from_args(args, **more):
             raise InputError(f"--seam-elements must be in 0..{MAX_SEAM_ELEMENTS} (0: the face's own elements), "
                              f"got {args.seam_elements}")
         more["seam_elements"] = args.seam_elements or None
-    base = PhysicsSettings() if getattr(args, "lips", "default") == "seed" else PhysicsSettings.speech()
+    if args.glue_profile is not None:
+        more["glue_profile"] = args.glue_profile
     try:
         saliva = dataclasses.replace(base.saliva, **params)
     except InputError as e:
         raise InputError(str(e).replace("moisture must", "--moisture must")
                          .replace("evaporation rate must", "--evaporation must")
                          .replace("saliva rupture time must", "--rupture-time must")) from None
-    return dataclasses.replace(base, glue_profile=args.glue_profile, saliva=saliva, **more)
+    return dataclasses.replace(base, saliva=saliva, **more)
 
 
 def simulation_of(rig, track, physics: str, settings):

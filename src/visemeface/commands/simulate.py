@@ -16,13 +16,7 @@ from visemeface.commands import _options as opt
 
 ORDER = 60
 
-#: --dt's range in s. Below 1e-6 a second of motion is over a million steps (about 5 minutes here), and far
-#: below it the step is no time at all (1e-308 was reported as a divergence); above 0.01 it is longer than a
-#: frame at 100 fps, and beyond the film's stable step, which a run refuses anyway.
-MIN_DT, MAX_DT = 1e-6, 0.01
-#: Largest --damping (1/s): the motion then relaxes in 0.1 ms, far past critical damping of any of the
-#: face's modes; 1e308 overflowed the integrator.
-MAX_DAMPING = 1e4
+from visemeface.physics.config import MAX_DAMPING, MAX_DT, MIN_DT
 
 EPILOG = """\
 examples:
@@ -73,7 +67,7 @@ def register(subparsers) -> None:
                       f"to {MAX_DT:g} (default: multi-rate, the "
                       "tissue's stable step with the lips' film nodes in substeps at the film's, printed at the "
                       "end; a step above the film's limit is refused)")
-    phys.add_argument("--damping", type=opt.number(0, MAX_DAMPING), default=80.0,
+    phys.add_argument("--damping", type=opt.number(0, MAX_DAMPING),
                       help=f"mass damping alpha in 1/s, 0 to {MAX_DAMPING:g} (default 80)")
     phys.add_argument("--jaw", type=opt.number(0, 1), default=0.35, help="jaw activation when open, 0 to 1 "
                       "(default 0.35)")
