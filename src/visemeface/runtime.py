@@ -41,6 +41,7 @@ behaviour call it themselves. What it sets, and why:
 
 from __future__ import annotations
 
+import contextlib
 import numbers
 import os
 import sys
@@ -199,3 +200,34 @@ def set_threads(n: int | None) -> int:
     if n is not None:
         numba.set_num_threads(check_threads(n))
     return numba.get_num_threads()
+
+
+
+@contextlib.contextmanager
+def signals_deferred():
+    """A context in which Ctrl-C and SIGTERM wait: the first that comes is delivered when the body ends.
+
+    For starting a child process that writes a file (ffmpeg): interrupted half way through its start, the
+    child runs on unseen by the code that would end it and writes its file after the interrupted run removed
+    its temporaries. Deferred, the interrupt comes after the start, where the child is ended and its file
+    removed. Outside the main thread (where signals cannot be set) the body runs as it is.
+    """
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    came = []
+    kept = {s: signal.signal(s, lambda signum, frame: came.append(signum)) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for s, handler in kept.items():
+            signal.signal(s, handler)
+        if came:
+            handler = kept[came[0]]
+            if callable(handler):
+                handler(came[0], None)             # the command's handler: KeyboardInterrupt, or the exit
+            elif handler == signal.SIG_DFL:
+                signal.raise_signal(came[0])

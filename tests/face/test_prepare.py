@@ -94,7 +94,7 @@ def test_prepared_default_face_poses_without_torn_lips(tmp_path):
         assert face.landmarks[name] == own.landmarks[name], name
     assert np.array_equal(face.regions["eyeballs"], own.regions["eyeballs"])     # open caps, with their pupils
     # the mesh's own colours (the irises, brows, lips; they were dropped and the eyes rendered blank white)
-    assert np.allclose(face.colors, own.colors, atol=1e-6)
+    assert np.allclose(face.colors, own.colors, rtol=0, atol=0.5 / 255 + 1e-9)     # kept, in the file's 8 bits
     # measured 1.89 (the face's own labels: 2.11)
     assert lip_stretch(face) < 3.0
 

@@ -80,6 +80,24 @@ class VideoWriter:
 
         stack = contextlib.ExitStack()
         tmp = stack.enter_context(atomic_output(self.path, self.force))
+        from visemeface.runtime import signals_deferred
+
+        try:
+            with signals_deferred():              # an interrupt while ffmpeg starts comes once it has started
+                self._start(imageio_ffmpeg, tmp)
+        except BaseException as err:
+            # stopped as ffmpeg starts (Ctrl-C): end ffmpeg before its file is removed, or it would write the
+            # file after the removal and leave it behind (and the unclosed writer's warning after our line)
+            gen, self._gen = self._gen, None
+            if gen is not None:
+                with contextlib.suppress(Exception), _quiet("imageio_ffmpeg"):
+                    gen.close()
+            stack.__exit__(type(err), err, err.__traceback__)
+            raise
+        self._stack = stack
+        return self
+
+    def _start(self, imageio_ffmpeg, tmp) -> None:
         params = ["-preset", self.preset, "-crf", str(self.crf), "-movflags", "+faststart"]
         audio_kw = {}
         if self.audio is not None:
@@ -93,8 +111,6 @@ class VideoWriter:
             pix_fmt_in="rgb24", pix_fmt_out="yuv420p", quality=None, macro_block_size=1,
             ffmpeg_log_level="error", output_params=params, **audio_kw)
         self._gen.send(None)
-        self._stack = stack
-        return self
 
     def write(self, frame: np.ndarray) -> None:
         """Append one frame, uint8 of shape (height, width, 3), RGB, top row first."""
