@@ -131,7 +131,7 @@ def interrupt(wav: Path, folder: Path) -> dict:
 
     data, rate = sf.read(str(wav), dtype="int16")
     listener = Listener()
-    proc = subprocess.Popen([sys.executable, "-m", "visemeface", "live", "-", "--format", "s16le", "--rate",
+    proc = subprocess.Popen([sys.executable, "-m", "visemeface", "live", "-", "--format", "s16le", "--sample-rate",
                              str(rate), "--vmc", f"127.0.0.1:{listener.port}"], stdin=subprocess.PIPE,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=_env(), cwd=folder)
     proc.stdout.readline()

@@ -69,7 +69,7 @@ def test_a_new_sink_is_an_option_of_speak_say_and_simulate_and_is_fed_every_fram
     monkey = pytest.MonkeyPatch()
     monkey.setattr(drive.StickySimulation, "frames", one_frame)
     try:
-        code = main(["simulate", "part", "--resolution", "800", "--fps", "10", "--no-video", "--csv", "s.csv",
+        code = main(["simulate", "part", "--resolution", "800", "--fps", "10", "--no-video", "--measures", "s.csv",
                      "--recorder", "c.rec", "-q"])
     finally:
         monkey.undo()
@@ -268,7 +268,7 @@ def test_a_diverged_run_keeps_no_checkpoint_and_does_not_offer_resume(work, reco
     monkey = pytest.MonkeyPatch()
     monkey.setattr(drive.StickySimulation, "frames", diverges_after_one)
     try:
-        code = main(["simulate", "part", "--resolution", "800", "--fps", "10", "--no-video", "--csv", "s.csv",
+        code = main(["simulate", "part", "--resolution", "800", "--fps", "10", "--no-video", "--measures", "s.csv",
                      "--frames", "fr", "--recorder", "c.rec", "-q"])
     finally:
         monkey.undo()

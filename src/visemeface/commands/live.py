@@ -32,7 +32,7 @@ examples:
   visemeface live take.wav --websocket 127.0.0.1:8765 --arkit take_arkit.csv   # played in real time, recorded
 
 Input: a recording (WAV, FLAC, MP3, a video's sound) played in real time; '-' reads stdin: a WAV
-stream, or raw PCM of --format/--rate/--channels. Ctrl-C ends it at once (exit status 130); the
+stream, or raw PCM of --format/--sample-rate/--channels. Ctrl-C ends it at once (exit status 130); the
 recording options (--arkit, --livelink, --track, ...) are written when the stream ends or is
 interrupted, from the frames that were sent. Only the addresses given are sent to.
 """
@@ -76,7 +76,7 @@ def register(subparsers) -> None:
     src.add_argument("--device", help="with --mic: the input device's name or number (default: the system's)")
     src.add_argument("--format", choices=tuple(FORMATS), default="s16le",
                      help="raw stdin samples: s16le (default), s32le or f32le (a WAV stream says its own)")
-    src.add_argument("--rate", type=int, default=16000, help="raw stdin sample rate in Hz (default 16000)")
+    src.add_argument("--sample-rate", type=int, default=16000, help="raw stdin sample rate in Hz (default 16000)")
     src.add_argument("--channels", type=int, default=1, help="raw stdin channels, mixed to mono (default 1)")
     src.add_argument("--fast", action="store_true",
                      help="a recording: read it as fast as it is decoded, not in real time (messages keep "
@@ -127,7 +127,7 @@ def _source(args):
     if args.audio is None:
         raise InputError("name the audio: a recording, '-' for stdin, or --mic")
     if args.audio == "-":
-        return audio.StreamSource(sys.stdin.fileno(), rate=args.rate, fmt=args.format, channels=args.channels)
+        return audio.StreamSource(sys.stdin.fileno(), rate=args.sample_rate, fmt=args.format, channels=args.channels)
     if not Path(args.audio).is_file():
         raise InputError("audio file not found", args.audio)
     return audio.FileSource(args.audio, realtime=not args.fast)
@@ -145,7 +145,7 @@ def _check_options(args) -> None:
     opt.check_fps_option(args.fps)
     if args.duration is not None and not args.duration > 0:
         raise InputError(f"--duration must be positive, got {args.duration:g}")
-    check_rate(args.rate, "--rate")
+    check_rate(args.sample_rate, "--sample-rate")
     if args.channels < 1:
         raise InputError(f"--channels must be at least 1, got {args.channels}")
     for name in ("vmc", "osc", "websocket"):
@@ -160,7 +160,7 @@ def _check_options(args) -> None:
             raise InputError(f"{option} is an option of --{option[2:5]}, which is not given")
     if args.osc_names != "arkit" and not (args.osc or args.websocket):
         raise InputError("--osc-names is an option of --osc and --websocket, neither of which is given")
-    raw = [o for o, on in (("--format", args.format != "s16le"), ("--rate", args.rate != 16000),
+    raw = [o for o, on in (("--format", args.format != "s16le"), ("--sample-rate", args.sample_rate != 16000),
                            ("--channels", args.channels != 1)) if on]
     if raw and args.audio != "-":
         raise InputError(f"{raw[0]} describes a raw stream on stdin ('-'); a file or microphone says its own")

@@ -30,7 +30,6 @@ class MeasuresSink(Sink):
     """
 
     name = "measures"
-    aliases = ("--csv",)
     metavar = "FILE.csv"
     help = "also write each frame's measures as CSV (a --physics simulation's saliva state)"
     suffixes = (".csv",)

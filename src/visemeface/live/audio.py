@@ -8,7 +8,7 @@ Stream formats
 A stream that starts with ``RIFF`` is read as a WAV stream (its header says the rate, channels and
 sample format; 8/16/24/32-bit PCM or 32-bit float; the length fields may be wrong, as in a WAV piped
 out of ffmpeg: the stream is read until it ends). Anything else is raw little-endian PCM of the given
-``--format`` (``s16le``, ``s32le``, ``f32le``), ``--rate`` and ``--channels``.
+``--format`` (``s16le``, ``s32le``, ``f32le``), ``--sample-rate`` and ``--channels``.
 
 A stream whose samples cannot be of the stated format is refused before any output
 (:func:`check_format`): 32-bit floats that are not finite or far outside [-1, 1] (integer samples read as
