@@ -96,12 +96,22 @@ def test_a_command_needing_a_missing_extra_names_it_in_one_line_and_writes_nothi
     assert sorted(p.name for p in tmp_path.iterdir()) == []
 
 
-def test_a_recording_without_the_audio_extra_is_refused_naming_it(tmp_path):
-    (tmp_path / "r.wav").write_bytes(b"RIFF")
-    done = _run_without(_modules(_extra_libraries("audio")), "lipsync", "r.wav", "-o", "r.lab", cwd=tmp_path)
+def test_a_wav_recording_aligns_in_the_core_and_a_video_one_names_the_audio_extra(tmp_path):
+    import shutil
+
+    from visemeface.resources import transcripts_path
+
+    for suffix in (".wav", ".txt"):
+        shutil.copy(transcripts_path("set_white_with_p_two_soon" + suffix), tmp_path / ("r" + suffix))
+    done = _run_without(OPTIONAL, "lipsync", "r.wav", "-o", "r.lab", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    words = [line.split()[-1] for line in (tmp_path / "r.lab").read_text().splitlines()]
+    assert {"s", "eh", "t"} <= set(words)
+    (tmp_path / "v.mp4").write_bytes(b"\x00\x00\x00\x18ftypmp42")
+    done = _run_without(OPTIONAL, "lipsync", "v.mp4", "--text", "set white", "-o", "v.lab", cwd=tmp_path)
     assert done.returncode == 2
-    assert '"visemeface[audio]"' in done.stderr and len(done.stderr.strip().splitlines()) == 1
-    assert not (tmp_path / "r.lab").exists()
+    assert '"visemeface[audio]"' in done.stderr and done.stderr.strip().splitlines()[-1].startswith("visemeface: error:")
+    assert not (tmp_path / "v.lab").exists()
 
 
 def test_an_import_error_that_is_not_a_missing_extra_stays_an_error():
