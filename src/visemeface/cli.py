@@ -44,12 +44,35 @@ def _exit_now(signum=None, frame=None):
 _received = False
 
 
+class _Muted:
+    """``sys.stderr`` once a command is interrupted: the one line is all it says.
+
+    An interrupt raised inside code that C calls (an extension module importing another, a finaliser) is
+    caught there and printed as a traceback through ``sys.stderr`` (``PyErr_Print``, the unraisable hook)
+    before the command unwinds; that is not the user's news. :func:`_interrupted` writes to the real stream.
+    """
+
+    def __init__(self, real):
+        self.real = real
+
+    def write(self, text):
+        return len(text)
+
+    def flush(self):
+        pass
+
+    def __getattr__(self, name):
+        return getattr(self.real, name)
+
+
 def _raise_interrupt(signum, frame):
     """The first Ctrl-C/SIGTERM of a running command: unwind as KeyboardInterrupt; a second: :func:`_exit_now`."""
     global _received
     _received = True
     for s in _SIGNALS:
         signal.signal(s, _exit_now)
+    if not isinstance(sys.stderr, _Muted):
+        sys.stderr = _Muted(sys.stderr)
     raise KeyboardInterrupt
 
 
@@ -85,14 +108,17 @@ def main(argv: list[str] | None = None) -> int:
             _end_interrupted()
         return EXIT["interrupted"]
     finally:
+        if isinstance(sys.stderr, _Muted):
+            sys.stderr = sys.stderr.real
         if previous is not None:
             for s, handler in previous.items():
                 signal.signal(s, _exit_now if argv is None else handler)
 
 
 def _interrupted() -> None:
-    sys.stderr.write(INTERRUPTED)
-    sys.stderr.flush()
+    stream = sys.stderr.real if isinstance(sys.stderr, _Muted) else sys.stderr
+    stream.write(INTERRUPTED)
+    stream.flush()
 
 
 def _end(status: int):

@@ -180,3 +180,31 @@ def test_after_the_interrupted_line_nothing_more_is_printed(tmp_path):
     lines = err.splitlines()          # the frames kept for --resume are said before it
     assert proc.returncode == 130 and lines[-1] == "visemeface: interrupted", err
     assert all(line.startswith("visemeface: ") for line in lines), err
+
+
+def test_an_interrupt_c_code_caught_and_printed_leaves_only_the_line():
+    """An interrupt raised where C code calls Python (an extension module importing another, a finaliser) is
+    printed there as a traceback through sys.stderr before the command unwinds (seen: two frames of
+    importlib, then the line, once in a few hundred interrupts of simulate); the user sees the one line."""
+    code = """
+import gc, os, signal, sys, time
+from visemeface import cli
+
+class Finalised:
+    def __del__(self):                       # run by the interpreter, which prints what it raises
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.5)
+
+def run(argv, armed):
+    Finalised()
+    gc.collect()
+    raise ImportError("the extension gave up after the interrupt it printed")
+
+cli._main = run
+status = cli.main(["visemes"])
+assert not isinstance(sys.stderr, cli._Muted)
+print(status)
+"""
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert done.stdout.strip() == "130", done.stdout + done.stderr
+    assert done.stderr == "visemeface: interrupted\n", done.stderr
