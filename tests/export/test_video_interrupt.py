@@ -50,3 +50,25 @@ def test_ctrl_c_as_ffmpeg_starts_leaves_no_file(tmp_path, monkeypatch):
     assert started and started[0].poll() is not None         # ffmpeg was ended, not left running
     time.sleep(0.5)
     assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+def test_a_writer_stopped_part_way_kills_ffmpeg_instead_of_waiting_for_its_file(tmp_path, monkeypatch):
+    """The file of a stopped writer is thrown away: ffmpeg is killed, not left to encode the frames it holds
+    (under load that took seconds after Ctrl-C, past the prompt end the signal tests ask for)."""
+    import imageio_ffmpeg._io as io
+
+    started = []
+    real = subprocess.Popen
+
+    def popen(*args, **kwargs):
+        started.append(real(*args, **kwargs))
+        return started[-1]
+
+    monkeypatch.setattr(io.subprocess, "Popen", popen)
+    with pytest.raises(KeyboardInterrupt):
+        with VideoWriter(tmp_path / "out.mp4", (256, 256), fps=30) as video:
+            for i in range(30):
+                video.write(np.full((256, 256, 3), i * 8, np.uint8))
+            raise KeyboardInterrupt
+    assert started[0].returncode == -signal.SIGKILL
+    assert sorted(p.name for p in tmp_path.iterdir()) == []

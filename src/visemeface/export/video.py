@@ -90,8 +90,7 @@ class VideoWriter:
             # file after the removal and leave it behind (and the unclosed writer's warning after our line)
             gen, self._gen = self._gen, None
             if gen is not None:
-                with contextlib.suppress(Exception), _quiet("imageio_ffmpeg"):
-                    gen.close()
+                _stop(gen)
             stack.__exit__(type(err), err, err.__traceback__)
             raise
         self._stack = stack
@@ -127,14 +126,25 @@ class VideoWriter:
             if exc_type is None:
                 gen.close()  # flushes and waits for ffmpeg to finish the file
             else:
-                # stopped (an error, Ctrl-C) before the first frame: imageio-ffmpeg logs that the file it was
-                # writing is invalid, a second line after ours; the file is a temporary, removed below
-                with contextlib.suppress(Exception), _quiet("imageio_ffmpeg"):
-                    gen.close()
+                _stop(gen)   # stopped (an error, Ctrl-C): the file is a temporary, removed below
         except BaseException as err:
             stack.__exit__(type(err), err, err.__traceback__)
             raise
         return stack.__exit__(exc_type, exc, tb)
+
+
+def _stop(gen) -> None:
+    """End a frame writer whose file will be discarded: ffmpeg is killed and reaped, not left to encode the
+    frames it holds (under load that took seconds after Ctrl-C), and imageio-ffmpeg's warning that the file
+    is invalid, a second line after ours, is not printed."""
+    frame = gen.gi_frame
+    proc = frame.f_locals.get("p") if frame is not None else None    # imageio-ffmpeg's ffmpeg process
+    with contextlib.suppress(BaseException), _quiet("imageio_ffmpeg"):
+        gen.throw(KeyboardInterrupt)     # its policy for an interrupt: kill ffmpeg, do not wait for the file
+    if proc is not None:
+        with contextlib.suppress(Exception):
+            proc.kill()
+            proc.wait(timeout=10)
 
 
 @contextlib.contextmanager
