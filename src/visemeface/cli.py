@@ -49,7 +49,7 @@ class _Muted:
 
     An interrupt raised inside code that C calls (an extension module importing another, a finaliser) is
     caught there and printed as a traceback through ``sys.stderr`` (``PyErr_Print``, the unraisable hook)
-    before the command unwinds; that is not the user's news. :func:`_interrupted` writes to the real stream.
+    before the command unwinds; that is not the user's news. :func:`interrupted_line` writes to the real stream.
     """
 
     def __init__(self, real):
@@ -103,7 +103,7 @@ def main(argv: list[str] | None = None) -> int:
     except BaseException as exc:
         if not (isinstance(exc, KeyboardInterrupt) or _received):
             raise
-        _interrupted()
+        interrupted_line()
         if argv is None:
             _end_interrupted()
         return EXIT["interrupted"]
@@ -115,9 +115,11 @@ def main(argv: list[str] | None = None) -> int:
                 signal.signal(s, _exit_now if argv is None else handler)
 
 
-def _interrupted() -> None:
+def interrupted_line(text: str = INTERRUPTED) -> None:
+    """Write an interrupted command's one line (``text``, ending in a newline) to the real stderr, which is
+    muted after the first signal (:class:`_Muted`)."""
     stream = sys.stderr.real if isinstance(sys.stderr, _Muted) else sys.stderr
-    stream.write(INTERRUPTED)
+    stream.write(text)
     stream.flush()
 
 

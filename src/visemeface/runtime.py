@@ -202,7 +202,6 @@ def set_threads(n: int | None) -> int:
     return numba.get_num_threads()
 
 
-
 @contextlib.contextmanager
 def signals_deferred():
     """A context in which Ctrl-C and SIGTERM wait: the first that comes is delivered when the body ends.

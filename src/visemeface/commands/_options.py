@@ -255,8 +255,6 @@ def add_physics_arguments(p: argparse.ArgumentParser, default: str, choices: tup
 LIPS = ("default", "seed")
 
 
-
-
 #: Options of the glue alone: the elastic face is the sticky one with no glue (``--physics elastic`` refuses them).
 GLUE_OPTIONS = ("glue", "glue_profile", "glue_file", "moisture", "evaporation", "critical_moisture")
 

@@ -290,10 +290,9 @@ def run(args) -> int:
     written = _write_recording(session, rig, sinks, saved, args) if recording and session.times else []
     if interrupted:
         more = f"; recorded {session.n_frames} frames -> {', '.join(map(str, written))}" if written else ""
-        # the one line of an interrupted command: to the real stream (after a signal sys.stderr says nothing else)
-        stream = getattr(sys.stderr, "real", sys.stderr)
-        print(f"visemeface: interrupted after {session.audio_s:.2f} s of audio{more}", file=stream)
-        stream.flush()
+        from visemeface.cli import interrupted_line
+
+        interrupted_line(f"visemeface: interrupted after {session.audio_s:.2f} s of audio{more}\n")
         return 130
     if not args.quiet:
         refused = sum(getattr(getattr(s, "udp", None), "refused", 0) for s in senders)
