@@ -54,3 +54,22 @@ def parse_json(text: str, path=None):
         raise InputError("not usable JSON: nested too deeply", path) from None
     except ValueError:                     # "Exceeds the limit (4300 digits) for integer string conversion"
         raise InputError("not usable JSON: a number of over 4300 digits", path) from None
+
+
+def parse_toml(text: str, path=None) -> dict:
+    """The tables of TOML ``text``; an :class:`InputError` naming ``path`` and the line for text that is
+    not TOML (the parser's message without its "(at line N, column M)", which Python < 3.14 appends)."""
+    import re
+    import tomllib
+
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        msg = str(getattr(exc, "msg", exc))
+        at = re.search(r"\s*\(at line (\d+), column \d+\)$", msg)
+        line = getattr(exc, "lineno", None) or (int(at.group(1)) if at else None)
+        raise InputError(f"not valid TOML: {msg[:at.start()] if at else msg}", path, line) from None
+    except RecursionError:
+        raise InputError("not usable TOML: nested too deeply", path) from None
+    except ValueError:
+        raise InputError("not usable TOML: a number of over 4300 digits", path) from None

@@ -273,7 +273,7 @@ def test_rig_file_syntax_and_missing(tmp_path):
     face = default_rig().face
     with pytest.raises(InputError, match="not valid TOML"):
         MuscleRig.from_file(face, _write(tmp_path, "[trim\n"))
-    with pytest.raises(InputError, match="cannot read"):
+    with pytest.raises(InputError, match="rig file not found"):
         MuscleRig.from_file(face, tmp_path / "missing.toml")
     text = _default_text().replace('name = "mentalis"', 'name = "risorius"')
     with pytest.raises(InputError, match="defined twice"):

@@ -56,8 +56,10 @@ def test_the_written_file_reads_back_to_the_same_settings(tmp_path, settings):
     ("glue = 0.1\nglue = 0.2\n", 2, r"not valid TOML"),
     ("[saliva]\nmuscles = 'loads'\n", 2, r"unknown key '\[saliva\] muscles'"),
     ("posture_hz = 5\n", 1, r"unknown key 'posture_hz'"),           # an experiment is no key of the file
+    ("glue = 0.1\nglue_profile = 'middle=0.2'\n", 2, r"glue_profile: glue profile 'middle=0.2': unknown place"),
+    ("glue_profile = 'centre=1e308'\n", 1, r"glue_profile: glue profile 'centre=1e308'"),
 ], ids=["typo", "table", "range-in-table", "huge", "limit", "bool", "whole", "nan", "toml", "wrong-table",
-        "experiment"])
+        "experiment", "profile-place", "profile-value"])
 def test_a_bad_file_names_its_line_and_key(tmp_path, text, line, message):
     path = tmp_path / "p.toml"
     path.write_text(text)
@@ -126,3 +128,20 @@ def test_a_file_moves_the_simulation_as_the_same_options_do(tmp_path, monkeypatc
     assert main([*run, "--measures", "default.csv"]) == 0
     assert (tmp_path / "file.csv").read_bytes() == (tmp_path / "options.csv").read_bytes()
     assert (tmp_path / "file.csv").read_bytes() != (tmp_path / "default.csv").read_bytes()
+
+
+@pytest.mark.parametrize("text, message", [
+    ("glue = " + "9" * 5000 + "\n", "a number of over 4300 digits"),
+    ("glue = " + "[" * 100000 + "\n", "nested too deeply"),
+])
+def test_a_toml_file_the_parser_cannot_hold_is_refused_in_one_line(tmp_path, text, message):
+    path = tmp_path / "huge.toml"
+    path.write_text(text)
+    with pytest.raises(InputError, match=message):
+        read_physics_config(path)
+
+
+def test_a_glue_file_the_configuration_names_is_read_when_the_configuration_is(tmp_path):
+    (tmp_path / "p.toml").write_text("glue_file = 'glue.csv'\n")
+    with pytest.raises(InputError, match="glue.csv"):
+        read_physics_config(tmp_path / "p.toml")

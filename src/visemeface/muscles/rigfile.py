@@ -8,13 +8,13 @@ names; :func:`muscles_from` builds the :class:`~visemeface.muscles.muscle.Muscle
 from __future__ import annotations
 
 import re
-import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 
 from visemeface.errors import InputError, close_matches
+from visemeface.textfile import parse_toml, read_text
 
 #: Region names of docs/conventions.md (a rig file may name them even if a mesh lacks some).
 CONVENTION_REGIONS = ("upper_lip", "lower_lip", "lip_seam_upper", "lip_seam_lower", "jaw", "fixed", "brow",
@@ -30,17 +30,8 @@ class _RigFileReader:
         self.path = path
         self.face = face
         self.frame = frame
-        try:
-            self.text = path.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise InputError(f"cannot read rig file: {exc.strerror}", path) from None
-        except UnicodeDecodeError:
-            raise InputError("not a rig file: not UTF-8 text", path) from None
-        try:
-            self.data = tomllib.loads(self.text)
-        except tomllib.TOMLDecodeError as exc:
-            line = getattr(exc, "lineno", None)
-            raise InputError(f"not valid TOML: {getattr(exc, 'msg', exc)}", path, line) from None
+        self.text = read_text(path, "rig file")
+        self.data = parse_toml(self.text, path)
 
     def line_of(self, name: str) -> int | None:
         m = re.search(r'^\s*name\s*=\s*"' + re.escape(name) + '"', self.text, re.M)

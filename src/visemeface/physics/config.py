@@ -18,10 +18,10 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
-import tomllib
 from pathlib import Path
 
 from visemeface.errors import InputError, close_matches
+from visemeface.textfile import parse_toml, read_text
 
 #: ``dt``'s range in s. Below 1e-6 a second of motion is over a million steps (about 5 minutes here), and far
 #: below it the step is no time at all (1e-308 was reported as a divergence); above 0.01 it is longer than a
@@ -83,19 +83,8 @@ def read_physics_config(path: str | Path) -> dict:
     Every refusal is an :class:`InputError` naming the file, the line and the key.
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"cannot read physics configuration: {exc.strerror or exc}", path) from None
-    except UnicodeDecodeError:
-        raise InputError("not a physics configuration: not UTF-8 text", path) from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        msg = str(getattr(exc, "msg", exc))
-        at = re.search(r"\s*\(at line (\d+), column \d+\)$", msg)      # Python < 3.14 keeps the line in the text
-        line = getattr(exc, "lineno", None) or (int(at.group(1)) if at else None)
-        raise InputError(f"not valid TOML: {msg[:at.start()] if at else msg}", path, line) from None
+    text = read_text(path, "physics configuration")
+    data = parse_toml(text, path)
     flat = {}
     for key, value in data.items():
         if isinstance(value, dict):
@@ -116,9 +105,24 @@ def read_physics_config(path: str | Path) -> dict:
         out[key] = _checked(KEYS[key], value, where, path, _line_of(text, key))
     if "glue_file" in out:
         out["glue_file"] = str((path.parent / out["glue_file"]).resolve())
+    _check_glue(out, text, path)
     if out.get("seam_elements") == 0:
         out["seam_elements"] = None
     return out
+
+
+def _check_glue(values: dict, text: str, path: Path) -> None:
+    """The file's glue profile and glue file read as the options' are, before any face is built: a bad one
+    is refused naming this file and the key's line (a glue file's own faults name the glue file)."""
+    from visemeface.physics.glue import check_glue_sources
+
+    if values.get("glue_profile"):
+        try:
+            check_glue_sources(values["glue_profile"])
+        except InputError as exc:
+            raise InputError(f"glue_profile: {exc.reason}", path, _line_of(text, "glue_profile")) from None
+    if values.get("glue_file"):
+        check_glue_sources(None, values["glue_file"])
 
 
 def _checked(spec, value, where: str, path: Path, line: int | None):
