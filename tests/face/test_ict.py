@@ -66,6 +66,45 @@ def test_no_emotion_dents_the_scalp(ict_rig):
         assert np.linalg.norm(ict_rig.displacement(a), axis=1)[scalp].max() < 1e-3, name
 
 
+def _pupil_and_iris(img, renderer, face, side):
+    """The rendered pupil's outline spread (std / mean of its edge's distance from its centroid: 0 for a
+    circle), its diameter, the iris' width on the pupil's row and how far the pupil sits off the iris' middle
+    (metres)."""
+    from scipy import ndimage
+
+    g = img.astype(float)
+    lum = g.mean(axis=2)
+    c = face.landmark_position(f"eye_centre_{side}")
+    (u, v), (u2, _) = renderer.project(np.stack([c, c + [0.01, 0.0, 0.0]]))
+    k = (u2 - u) / 0.01
+    labels, _ = ndimage.label(lum < 40)
+    window = labels[int(v) - 5:int(v) + 6, int(u) - 5:int(u) + 6]
+    pupil = labels == np.bincount(window[window > 0]).argmax()
+    ys, xs = np.nonzero(pupil)
+    cx, cy = xs.mean(), ys.mean()
+    ey, ex = np.nonzero(pupil & ~ndimage.binary_erosion(pupil))
+    d = np.hypot(ex - cx, ey - cy)
+    row = g[int(round(cy))]
+    dark = (row[:, 0] - row[:, 2] > 25) & (row.mean(axis=1) < 150) | (lum[int(round(cy))] < 40)
+    right = next(i for i in range(int(cx), img.shape[1]) if not dark[i])
+    left = next(i for i in range(int(cx), 0, -1) if not dark[i])
+    return d.std() / d.mean(), 2 * np.sqrt(pupil.sum() / np.pi) / k, (right - left - 1) / k, ((right + left) / 2 - cx) / k
+
+
+def test_the_iris_and_pupil_are_round_an_adults_and_centred():
+    from visemeface.render.renderer import Renderer
+
+    face = ict_face()
+    with Renderer(face, size=1024, view="face") as r:
+        img = r.render()
+    for side in ("left", "right"):
+        spread, pupil, iris, off = _pupil_and_iris(img, r, face, side)
+        assert spread < 0.07                 # a round pupil (a cut at the shell's uneven rings: a star, 0.12)
+        assert 3.0e-3 < pupil < 5.0e-3        # about 4 mm in room light
+        assert 11.0e-3 < iris < 12.5e-3       # an adult's iris, 11.8 mm across
+        assert abs(off) < 0.7e-3              # the pupil in the iris' middle
+
+
 def test_a_blink_brings_the_upper_lid_down_to_the_lower(ict_rig):
     face = ict_rig.face
     a = np.zeros(len(ict_rig.names))

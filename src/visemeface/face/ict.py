@@ -92,6 +92,40 @@ def _regions_and_landmarks(V, quads, tris, lm68) -> tuple[dict, dict]:
     return regions, landmarks
 
 
+#: An adult's iris is 11.8 mm across (horizontal visible iris diameter; Rüfer et al. 2005) and its pupil
+#: about 4 mm in room light; both are painted on ICT's eye shells as discs about the cornea's axis.
+IRIS_RADIUS = 0.0059
+PUPIL_RADIUS = 0.0020
+_EDGE = 0.0008
+#: Each ICT eyeball part is two shells: the outer one (the sclera with the cornea's bulge in front, its first
+#: 770 vertices) and the inner iris shell behind it.
+_OUTER_SHELL = 770
+
+
+def _sphere_fit(P: np.ndarray) -> tuple[np.ndarray, float]:
+    """The least-squares sphere through points ``P``: (centre, radius)."""
+    A = np.column_stack([2.0 * P, np.ones(len(P))])
+    sol, *_ = np.linalg.lstsq(A, (P * P).sum(axis=1), rcond=None)
+    centre = sol[:3]
+    return centre, float(np.sqrt(sol[3] + centre @ centre))
+
+
+def _eye_axis_distance(P: np.ndarray, shell: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each point's distance from the eye's optical axis and whether it lies in front of the eye's centre.
+
+    The centre is the sphere fitted to the outer shell; the axis runs from it through the cornea's apex (the
+    shell's farthest point from the centre: the cornea bulges about 1 mm past the sclera's sphere). Painted by
+    this distance, the iris and pupil are round and centred under the cornea, as they are in a real eye."""
+    centre, _ = _sphere_fit(shell)
+    d = shell - centre
+    axis = d[np.argmax(np.einsum("ij,ij->i", d, d))]
+    axis = axis / np.linalg.norm(axis)
+    r = P - centre
+    along = r @ axis
+    rho = np.linalg.norm(r - np.outer(along, axis), axis=1)
+    return rho, along > 0.0
+
+
 def _colours(V: np.ndarray, regions: dict) -> np.ndarray:
     p = parts()
     c = np.tile(COLOURS["skin"], (len(V), 1))
@@ -101,16 +135,15 @@ def _colours(V: np.ndarray, regions: dict) -> np.ndarray:
     c[p["gums_and_tongue"]] = COLOURS["gums"]
     c[p["teeth"]] = COLOURS["teeth"]
     for side in ("left", "right"):
-        # ICT's sclera and iris parts are both whole shells (the sclera also the cornea in front of the iris):
-        # coloured by the angle from the eye's forward axis, an adult iris (about 12 mm across on a 12 mm
-        # eyeball radius: 28 degrees) with a pupil of 11 degrees
         ball = p[f"eyeball_{side}"]
-        centre = V[ball[:770]].mean(axis=0)
-        r = V[ball] - centre
-        angle = np.degrees(np.arccos(np.clip(r[:, 2] / np.linalg.norm(r, axis=1), -1.0, 1.0)))
-        c[ball] = COLOURS["sclera"]
-        c[ball[angle < 28.0]] = COLOURS["iris"]
-        c[ball[angle < 11.0]] = COLOURS["pupil"]
+        rho, front = _eye_axis_distance(V[ball], V[ball[:_OUTER_SHELL]])
+        rho = np.where(front, rho, np.inf)
+        # blended over about one ring of the shell's polar grid (0.8 mm), so neither edge follows the rings'
+        # unevenness: a hard cut made the pupil a star and notched the iris
+        iris = np.clip((IRIS_RADIUS - rho) / _EDGE + 0.5, 0.0, 1.0)[:, None]
+        pupil = np.clip((PUPIL_RADIUS - rho) / _EDGE + 0.5, 0.0, 1.0)[:, None]
+        sclera, brown, black = (np.asarray(COLOURS[k]) for k in ("sclera", "iris", "pupil"))
+        c[ball] = sclera + iris * (brown - sclera) + pupil * (black - brown)
     return c
 
 
