@@ -98,13 +98,15 @@ def poses(rig, weights):
             yield name, w, posed_vertices(rig, "_", {name: w})
 
 
-def judge_table(weights=(0.6, 1.0), views=("face", "three-quarter"), size=256, judge=None) -> list[dict]:
-    """One row per (emotion, weight, view): the judge's probabilities and top class."""
-    from visemeface.muscles.rig import default_rig
+def judge_table(weights=(0.6, 1.0), views=("face", "three-quarter"), size=256, judge=None,
+                face=None) -> list[dict]:
+    """One row per (emotion, weight, view): the judge's probabilities and top class (``face``: a face as
+    ``--face`` takes it, e.g. ``ict``; None: the default face)."""
+    from visemeface.muscles.rig import rig_for
     from visemeface.render.renderer import Renderer
 
     judge = judge or Judge()
-    rig = default_rig()
+    rig = rig_for(face)
     posed = list(poses(rig, weights))
     rows = []
     for view in views:
@@ -119,17 +121,17 @@ def judge_table(weights=(0.6, 1.0), views=("face", "three-quarter"), size=256, j
     return rows
 
 
-def speech_track(text: str, emotion: str, fps: float = 25.0):
+def speech_track(text: str, emotion: str, fps: float = 25.0, face=None):
     """The activation track ``speak`` animates for TEXT spoken with ``--emotion NAME=W`` (blinks, and the brow
     raises and gaze of the prosodic gestures, included)."""
     from visemeface.animate import parse_emotions
-    from visemeface.muscles.rig import default_rig
+    from visemeface.muscles.rig import rig_for
     from visemeface.postures.library import load_expressions, load_visemes
     from visemeface.speech.blinks import blink_utterance
     from visemeface.speech.g2p import text_to_utterance
     from visemeface.speech.timeline import MODES, activation_track
 
-    rig = default_rig()
+    rig = rig_for(face)
     utt = text_to_utterance(text)
     mix = parse_emotions([emotion], load_expressions(rig=rig).index)
     ranges = {n: tuple(r) for n, r in zip(rig.names, rig.ranges)}
@@ -141,13 +143,13 @@ def speech_track(text: str, emotion: str, fps: float = 25.0):
     return rig, track, next(iter(mix))
 
 
-def speech_table(text: str, emotion: str, size=256, fps=25.0, judge=None) -> dict:
+def speech_table(text: str, emotion: str, size=256, fps=25.0, judge=None, face=None) -> dict:
     """Judge every frame of TEXT spoken with ``--emotion NAME=W``: the share of frames read as the emotion."""
     from visemeface.motion import KinematicMotion
     from visemeface.render.renderer import Renderer
 
     judge = judge or Judge()
-    rig, track, name = speech_track(text, emotion, fps)
+    rig, track, name = speech_track(text, emotion, fps, face)
     motion = KinematicMotion(rig, track)
     tops = []
     with Renderer(rig.face, size=(size, size), view="face") as r:
@@ -187,16 +189,17 @@ def main(argv=None) -> int:
     p.add_argument("--size", type=int, default=256, help="render size in pixels (default 256)")
     p.add_argument("--speak", metavar="TEXT", help="judge the frames of this sentence spoken with --emotion")
     p.add_argument("--emotion", default="happiness=0.8", help="with --speak: NAME=W (default happiness=0.8)")
+    p.add_argument("--face", default=None, help="a face as the CLI's --face takes it, e.g. ict (default: the default face)")
     p.add_argument("--json", action="store_true", help="print JSON lines instead of the table")
     a = p.parse_args(argv)
     judge = Judge()
     if a.speak:
-        res = speech_table(a.speak, a.emotion, size=a.size, judge=judge)
+        res = speech_table(a.speak, a.emotion, size=a.size, judge=judge, face=a.face)
         print(json.dumps(res) if a.json else
               f"{a.emotion} while saying {a.speak!r}: {res['frames']} frames, read as intended on "
               f"{100 * res['share']:.0f} % ({res['tops']})")
         return 0
-    rows = judge_table(a.weights, a.views, a.size, judge)
+    rows = judge_table(a.weights, a.views, a.size, judge, a.face)
     if a.json:
         for r in rows:
             print(json.dumps(r))

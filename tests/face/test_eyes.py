@@ -87,3 +87,28 @@ def test_a_wet_highlight_on_each_cornea(rig, front):
         r = int(0.006 * k)
         patch = img[int(v) - r:int(v) + 1, int(u) - r // 2:int(u) + r // 2 + 1].mean(axis=2)
         assert patch.max() > 200 and patch.min() < 40              # a bright spot on the dark iris/pupil
+
+
+@pytest.mark.parametrize("face", ["procedural", "ict"])
+def test_the_upper_lid_follows_a_vertical_gaze_and_the_corners_stay(face):
+    """Looking up or down, the upper lid's margin over the pupil moves with it (about one to one, Becker &
+    Fuchs 1988): a lid left behind bares the white above the iris looking up and crosses it looking down.
+    The eye's corners, held by the canthal tendons, barely move."""
+    from visemeface.muscles.rig import rig_for
+
+    rig = rig_for(face)
+    f, rest = rig.face, rig.face.vertices
+    for gaze in (1.0, -1.0):
+        posed = rig.pose({"eye_turn_vertical_left": gaze, "eye_turn_vertical_right": gaze})
+        for side in ("left", "right"):
+            pupil = f.landmarks[f"eye_centre_{side}"]
+            lid = f.regions["upper_lids"]
+            lid = lid[np.sign(rest[lid, 0]) == np.sign(rest[pupil, 0])]          # this eye's
+            dx = np.abs(rest[lid, 0] - rest[pupil, 0])
+            over = lid[dx < 0.002]
+            margin = over[np.argmin(rest[over, 1])]
+            rise = posed[pupil, 1] - rest[pupil, 1]
+            assert abs(rise) > 2.0e-3 and np.sign(rise) == np.sign(gaze)
+            assert abs(posed[margin, 1] - rest[margin, 1] - rise) < 0.3 * abs(rise)
+            corners = lid[dx > 0.012]
+            assert np.abs(posed[corners] - rest[corners]).max() < 0.3 * abs(rise)

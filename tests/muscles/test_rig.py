@@ -269,6 +269,14 @@ def test_rig_file_errors_name_file_entry_field(tmp_path, old, new, field):
     assert f"{path}:" in msg
 
 
+def test_a_gaze_whose_lids_follow_from_nowhere_is_refused_naming_the_field(tmp_path):
+    text = _default_text()
+    assert "lid_radius = 0.3" in text
+    path = _write(tmp_path, text.replace("lid_radius = 0.3", "lid_radius = -0.3", 1))
+    with pytest.raises(InputError, match="'eye_turn_vertical'.*'lids'.*lid_radius > 0"):
+        MuscleRig.from_file(default_rig().face, path)
+
+
 def test_rig_file_syntax_and_missing(tmp_path):
     face = default_rig().face
     with pytest.raises(InputError, match="not valid TOML"):
@@ -416,11 +424,14 @@ def test_gaze_turns_each_iris_and_nothing_else(rig):
     face = rig.face
     for side in ("left", "right"):
         pupil = face.landmarks[f"eye_centre_{side}"]
-        mine = np.intersect1d(face.regions["eyeballs"],
-                              np.flatnonzero(np.sign(face.vertices[:, 0]) == (1 if side == "left" else -1)))
+        this_side = np.flatnonzero(np.sign(face.vertices[:, 0]) == (1 if side == "left" else -1))
+        mine = np.intersect1d(face.regions["eyeballs"], this_side)
         for name, axis, deg in ((f"eye_turn_horizontal_{side}", 0, 20.0), (f"eye_turn_vertical_{side}", 1, 15.0)):
             b = rig.bases[rig.names.index(name)]
             moved = np.flatnonzero(np.linalg.norm(b, axis=1) > 0)
-            assert np.isin(moved, mine).all()                       # one eyeball, nothing else
+            lids = np.intersect1d(face.regions["upper_lids"], this_side)
+            # one eyeball, and for a vertical gaze its upper lid (which follows it), nothing else
+            assert np.isin(moved, np.union1d(mine, lids) if axis == 1 else mine).all()
+            assert np.isin(moved, lids).any() == (axis == 1)
             # the pupil moves sideways (up) by about r sin(angle), r = 9.5 mm behind the pupil
             assert b[pupil, axis] == pytest.approx(0.0095 * np.radians(deg), rel=0.1)

@@ -366,7 +366,8 @@ def local_displacement(points: np.ndarray, centre, radii, direction, mask: np.nd
 
 
 def turn_displacement(points: np.ndarray, centre, axis, angle: float, mask: np.ndarray,
-                      radius: float | None = None, view=(0.0, 0.0, 1.0)) -> np.ndarray:
+                      radius: float | None = None, view=(0.0, 0.0, 1.0), lids: np.ndarray | None = None,
+                      lid_follow: float = 0.0, lid_radius: float | None = None) -> np.ndarray:
     r"""A small rotation (N, 3) of the vertices in ``mask`` about ``axis`` through ``centre``, linearised:
 
     .. math:: \Delta\mathbf p = w\,\theta\,\mathbf k \times (\mathbf p - \mathbf c),
@@ -375,13 +376,21 @@ def turn_displacement(points: np.ndarray, centre, axis, angle: float, mask: np.n
     ``radius`` of the line through ``centre`` along ``view`` turns (:math:`w` falls
     from 1 at 0.7 ``radius`` to 0 at ``radius``): the iris slides over the sclera,
     and the eyeball's wide sides stay under the lids.
+
+    With ``lids`` (a mask) the lid vertices turn too, by ``lid_follow`` of the angle about the same centre,
+    so they slide over the globe with it, fading from full at half ``lid_radius`` from that line to none at
+    ``lid_radius`` (the eye's corners, held by the canthal tendons, barely move): the upper lid follows
+    vertical gaze about one to one (Becker & Fuchs 1988), so looking up or down neither bares the white
+    above the iris nor drives the lid through it.
     """
     points = np.asarray(points, dtype=float)
     k = _unit(axis)
     r = points - np.asarray(centre, dtype=float)
+    v = _unit(view)
+    d = np.linalg.norm(r - np.outer(r @ v, v), axis=1)
     w = np.asarray(mask, dtype=float)
     if radius is not None:
-        v = _unit(view)
-        d = np.linalg.norm(r - np.outer(r @ v, v), axis=1)
         w = w * smoothstep(radius, 0.7 * radius, d)
+    if lids is not None and lid_follow and lid_radius:
+        w = w + float(lid_follow) * np.asarray(lids, dtype=float) * smoothstep(lid_radius, 0.5 * lid_radius, d)
     return float(angle) * np.cross(k, r) * w[:, None]
