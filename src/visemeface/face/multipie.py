@@ -20,7 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import dijkstra
+from scipy.sparse.csgraph import connected_components, dijkstra
+from scipy.sparse.linalg import spsolve
 
 #: Multi-PIE 68 indices (0-based) of the landmarks the rig places itself by.
 NAMED = {"mouth_corner_right": 48, "mouth_corner_left": 54, "upper_lip_mid": 62, "lower_lip_mid": 66,
@@ -50,6 +51,30 @@ def edge_graph(vertices: np.ndarray, quads: np.ndarray, tris: np.ndarray, keep: 
     n = len(vertices)
     g = sp.coo_matrix((w, (e[:, 0], e[:, 1])), shape=(n, n)).tocsr()
     return g.maximum(g.T)
+
+
+def harmonic_extension(edges: np.ndarray, values: np.ndarray, fixed: np.ndarray, free: np.ndarray) -> np.ndarray:
+    """``values`` (N,) with those of the ``free`` vertices replaced by the mesh graph's harmonic extension of
+    the ``fixed`` ones (each free vertex the mean of its neighbours along ``edges``, (E, 2)): a smooth map over
+    a region from its border. Free vertices in a part of the graph that reaches no fixed vertex keep their
+    values."""
+    n = len(values)
+    use = (free | fixed)[edges].all(axis=1) & free[edges].any(axis=1)
+    e = edges[use]
+    A = sp.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n)).tocsr()
+    A = ((A + A.T) > 0).astype(float)
+    idx, fix = np.flatnonzero(free), np.flatnonzero(fixed & ~free)
+    out = np.asarray(values, dtype=float).copy()
+    Aff, Afx = A[idx][:, idx], A[idx][:, fix]
+    _, label = connected_components(Aff, directed=False)
+    touches = np.zeros(label.max() + 1 if len(label) else 0, bool)
+    touches[label[np.asarray(Afx.sum(axis=1)).ravel() > 0]] = True
+    m = touches[label]
+    if m.any():
+        deg = np.asarray(A[idx[m]].sum(axis=1)).ravel()
+        L = sp.diags(deg) - Aff[m][:, m]
+        out[idx[m]] = spsolve(L.tocsc(), Afx[m] @ out[fix])
+    return out
 
 
 def surface_path(graph, a: int, b: int) -> list[int]:

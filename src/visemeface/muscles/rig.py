@@ -217,6 +217,15 @@ class MuscleRig:
             side[face.regions["upper_lip"]] = 1.0
         if "lower_lip" in face.regions:
             side[face.regions["lower_lip"]] = -1.0
+        if "cavity_wall" in face.regions:
+            # the mouth's lining goes with the lip it joins, fading into the cavity (a smooth map over the
+            # lining from the lips' inner edges): by height alone the lining behind a lip's corner split
+            # half and half while that lip went one way, and the triangles between stretched 4.6 times
+            from visemeface.face.multipie import face_edges, harmonic_extension
+
+            lining = np.zeros(len(u), bool)
+            lining[face.regions["cavity_wall"]] = True
+            side = harmonic_extension(face_edges(face.quads, face.tris), side, side != 0, lining & (side == 0))
         return mf.lip_trim_weights(u, local[:, 1], surface, side, trim["inner_width"] * frame.width,
                                    trim["outer_width"] * frame.width, trim["corner_start"], trim["corner_end"],
                                    tag)
