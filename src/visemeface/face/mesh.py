@@ -165,9 +165,13 @@ class FaceMesh:
         P, parent = self.shading_parent
         coarse, n = parent.normal_accumulator(), parent.n_vertices
 
-        def normals(vertices, dtype=np.float64):
+        def normals(vertices, dtype=np.float64, lengths=None):
             v = np.asarray(vertices)
-            return unit_rows(P @ coarse(v[:n], dtype=np.float64)).astype(dtype, copy=False)
+            own = None if lengths is None else np.empty(n)
+            out = unit_rows(P @ coarse(v[:n], dtype=np.float64, lengths=own)).astype(dtype, copy=False)
+            if lengths is not None:
+                lengths[:] = P @ own          # the parent's, interpolated as the vertices were
+            return out
 
         return normals
 

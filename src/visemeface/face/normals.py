@@ -25,7 +25,7 @@ def _accumulate():
     from numba import njit
 
     @njit(cache=True, boundscheck=False)
-    def accumulate(v, tris, weight, out):
+    def accumulate(v, tris, weight, out, lengths):
         out[:] = 0
         for t in range(tris.shape[0]):
             a, b, c = tris[t, 0], tris[t, 1], tris[t, 2]
@@ -42,6 +42,7 @@ def _accumulate():
                     out[i, 2] += fz
         for i in range(out.shape[0]):
             n = np.sqrt(out[i, 0] * out[i, 0] + out[i, 1] * out[i, 1] + out[i, 2] * out[i, 2])
+            lengths[i] = n
             if n > 0:
                 out[i, 0] /= n
                 out[i, 1] /= n
@@ -82,14 +83,20 @@ class NormalAccumulator:
             self._incidence32 = self._incidence.astype(np.float32)
             self._a, self._b, self._c = (np.ascontiguousarray(self.triangles[:, k]) for k in range(3))
 
-    def __call__(self, vertices: np.ndarray, dtype=np.float64) -> np.ndarray:
-        """Unit normals (N, 3) of ``vertices`` in ``dtype`` (``np.float32`` for per-frame rendering)."""
+    def __call__(self, vertices: np.ndarray, dtype=np.float64, lengths: np.ndarray | None = None) -> np.ndarray:
+        """Unit normals (N, 3) of ``vertices`` in ``dtype`` (``np.float32`` for per-frame rendering).
+
+        ``lengths`` (N,), if given, receives each sum's length before it is normalised: twice the area around
+        the vertex where the surface is flat, less where it bends (see :mod:`visemeface.render.folds`)."""
         v = np.ascontiguousarray(vertices, dtype=dtype)
         if v.shape != (self.n_vertices, 3):
             raise ValueError(f"expected ({self.n_vertices}, 3) vertices, got {v.shape}")
         if self._weight is not None:
             out = np.empty_like(v)
-            _accumulate()(v, self.triangles, self._weight, out)
+            scratch = np.empty(self.n_vertices, dtype=v.dtype) if lengths is None else lengths
+            _accumulate()(v, self.triangles, self._weight, out, scratch)
+            if lengths is not None and scratch is not lengths:
+                lengths[:] = scratch
             return out
         p0 = v[self._a]
         e1 = v[self._b] - p0
@@ -98,12 +105,14 @@ class NormalAccumulator:
         f[:, 0] = e1[:, 1] * e2[:, 2] - e1[:, 2] * e2[:, 1]
         f[:, 1] = e1[:, 2] * e2[:, 0] - e1[:, 0] * e2[:, 2]
         f[:, 2] = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
-        return unit_rows((self._incidence32 if v.dtype == np.float32 else self._incidence) @ f)
+        return unit_rows((self._incidence32 if v.dtype == np.float32 else self._incidence) @ f, lengths)
 
 
-def unit_rows(n: np.ndarray) -> np.ndarray:
-    """Each row of ``n`` scaled to unit length (zero rows kept)."""
+def unit_rows(n: np.ndarray, lengths: np.ndarray | None = None) -> np.ndarray:
+    """Each row of ``n`` scaled to unit length (zero rows kept); ``lengths`` receives the rows' lengths."""
     length = np.sqrt(np.einsum("ij,ij->i", n, n))
+    if lengths is not None:
+        lengths[:] = length
     length[length == 0] = 1.0
     return n / length[:, None]
 

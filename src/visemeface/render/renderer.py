@@ -24,7 +24,8 @@ Shading
 Two directional lights and ambient, Lambert diffuse plus a weak Blinn–Phong
 highlight, both sides lit (back faces use the flipped normal), on a dark
 background; the colours come from :meth:`FaceMesh.vertex_colors`, so the
-mouth cavity renders dark.
+mouth cavity renders dark, and skin the pose compresses shades darker, as its
+folds would (:mod:`visemeface.render.folds`; a face at rest is unchanged).
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ import numpy as np
 
 from visemeface.errors import InputError, RenderUnavailable
 from visemeface.face.mesh import FaceMesh
+from visemeface.render.folds import fold_shade
 
 from visemeface.render import PROJECTIONS, VIEWS  # noqa: E402  (re-exported)
 BACKGROUND = (0.045, 0.047, 0.06)
@@ -54,6 +56,7 @@ uniform mat4 u_view;
 in vec3 in_pos;
 in vec3 in_normal;
 in vec3 in_color;
+in float in_fold;
 out vec3 v_front;
 out vec3 v_back;
 
@@ -71,8 +74,9 @@ void main() {
     gl_Position = u_mvp * vec4(in_pos, 1.0);
     vec3 n = normalize(mat3(u_view) * in_normal);
     vec3 view_dir = normalize(-(u_view * vec4(in_pos, 1.0)).xyz);
-    v_front = shade(n, view_dir, in_color);
-    v_back = shade(-n, view_dir, in_color);
+    vec3 color = in_color * (1.0 - in_fold);     // compressed skin: a fold's shade (render/folds.py)
+    v_front = shade(n, view_dir, color);
+    v_back = shade(-n, view_dir, color);
 }
 """
 
@@ -315,7 +319,10 @@ class Renderer:
             if name in self.program:          # a uniform the shader does not use is optimised away
                 self.program[name].write(matrix.T.astype("f4").tobytes())
         n = self.face.n_vertices
-        self._vbo_data = np.empty((n, 6), dtype="f4")
+        self._vbo_data = np.empty((n, 7), dtype="f4")
+        self._lengths = np.empty(n, dtype="f4")
+        self._rest_lengths = np.empty(n, dtype="f4")
+        self._normals(self.face.vertices, dtype=np.float32, lengths=self._rest_lengths)
         self.vbo = ctx.buffer(reserve=self._vbo_data.nbytes, dynamic=True)
         self.cbo = ctx.buffer(np.ascontiguousarray(self.face.vertex_colors(), dtype="f4").tobytes())
         self.ibo = ctx.buffer(self._triangles.tobytes())
@@ -334,7 +341,7 @@ class Renderer:
 
     def _vertex_array(self, ibo):
         """The face's vertex array drawing the triangles of index buffer ``ibo``."""
-        return self.ctx.vertex_array(self.program, [(self.vbo, "3f 3f", "in_pos", "in_normal"),
+        return self.ctx.vertex_array(self.program, [(self.vbo, "3f 3f 1f", "in_pos", "in_normal", "in_fold"),
                                                     (self.cbo, "3f", "in_color")],
                                      index_buffer=ibo, index_element_size=4)
 
@@ -375,7 +382,8 @@ class Renderer:
         if not np.isfinite(v).all():
             raise InputError("vertices hold NaN or infinite values")
         self._vbo_data[:, :3] = v
-        self._vbo_data[:, 3:] = self._normals(v, dtype=np.float32)
+        self._vbo_data[:, 3:6] = self._normals(v, dtype=np.float32, lengths=self._lengths)
+        self._vbo_data[:, 6] = fold_shade(self._lengths, self._rest_lengths)
         vao = self.vao
         if self._still is not None and np.array_equal(self._vbo_data[self._still, :3], self._still_rest):
             vao = self.vao_shown        # the still vertices at rest: the still triangles hidden at rest stay so
