@@ -62,7 +62,7 @@ def test_a_smile_shades_the_nasolabial_fold_and_an_open_jaw_shades_nothing():
     smile = shade({"zygomatic_major_left": 1.0, "zygomatic_major_right": 1.0})
     assert smile[fold].max() > 0.5 * FOLD_DEPTH
     chin = (np.abs(local[:, 0]) < 0.4) & (local[:, 1] < -0.2)
-    assert shade({"jaw": 1.0})[chin].max() < 0.05 * FOLD_DEPTH          # the chin and lower lip are stretched
+    assert shade({"jaw": 1.0})[chin].max() < 0.1 * FOLD_DEPTH           # the chin and lower lip are stretched
     # at rest a render is what it was without folds: every pixel
     with Renderer(face, size=128) as r:
         a = r.render()

@@ -11,11 +11,12 @@ over its length at rest,
 
 is the local compression (and bending). The colour is darkened by :math:`D\,\mathrm{smoothstep}(c_0, c_1, c)`:
 nothing at rest or where the skin is stretched (the pixels of a face at rest are unchanged), full where it
-is compressed by a third.
+is compressed by two fifths.
 
-The three constants are chosen by looking at the emotions' renders, not measured: skin under about 6 %
-compression stays smooth, and a deep fold's valley in a photograph is about a third darker than the skin
-beside it.
+The three constants are chosen by looking at the emotions' renders, not measured: the shade begins at 3 %
+compression and ramps slowly, so a fold's shade has no edge (a steeper ramp made stains of the forehead), and
+at its darkest it takes a fifth off the skin's colour (a third read more often to the expression judge of
+``scripts/emotion_judge.py`` but looked like dirt on the cheeks).
 """
 
 from __future__ import annotations
@@ -24,10 +25,10 @@ import numpy as np
 
 
 #: Compression where the shade begins, and where it is full.
-FOLD_START = 0.06
-FOLD_FULL = 0.33
+FOLD_START = 0.03
+FOLD_FULL = 0.40
 #: The darkest a fold makes the skin: a fraction of its colour.
-FOLD_DEPTH = 0.30
+FOLD_DEPTH = 0.22
 
 
 def fold_shade(lengths: np.ndarray, rest_lengths: np.ndarray) -> np.ndarray:
