@@ -93,10 +93,8 @@ class NormalAccumulator:
             raise ValueError(f"expected ({self.n_vertices}, 3) vertices, got {v.shape}")
         if self._weight is not None:
             out = np.empty_like(v)
-            scratch = np.empty(self.n_vertices, dtype=v.dtype) if lengths is None else lengths
-            _accumulate()(v, self.triangles, self._weight, out, scratch)
-            if lengths is not None and scratch is not lengths:
-                lengths[:] = scratch
+            _accumulate()(v, self.triangles, self._weight, out,
+                          np.empty(self.n_vertices, dtype=v.dtype) if lengths is None else lengths)
             return out
         p0 = v[self._a]
         e1 = v[self._b] - p0

@@ -117,7 +117,8 @@ class MuscleRig:
         self.rest = rest = face.vertices
         local = frame.to_local(rest)
         u = local[:, 0] / (frame.width / 2)
-        self.upper_weight = self._trim_weights(face, frame, local, u, trim)
+        surface, side = self._seam_surface(face, local, u, trim), self._lip_sides(face)
+        self.upper_weight = self._trim_weights(frame, local, u, surface, side, trim)
         lower = 1.0 - self.upper_weight
         bases = np.zeros((len(muscles), len(rest), 3))
         for i, m in enumerate(muscles):
@@ -136,7 +137,7 @@ class MuscleRig:
         # The jaw's own trim: its blend starts nearer the centre and its lip tag is weaker, so
         # the opening narrows smoothly into the corners (a lens, not a box with vertical ends).
         jaw_trim = dict(trim, corner_start=jaw["corner_start"], corner_end=jaw["corner_end"])
-        jaw_lower = 1.0 - self._trim_weights(face, frame, local, u, jaw_trim, tag=jaw["tag"])
+        jaw_lower = 1.0 - self._trim_weights(frame, local, u, surface, side, jaw_trim, tag=jaw["tag"])
         jw = mf.jaw_centre_weight(u, jaw["reach"]) * jaw_lower
         if jaw.get("neck_fade") is not None:
             jw = jw * mf.jaw_neck_weight(rest, face.landmark_position(jaw["joints"][0]),
@@ -207,12 +208,18 @@ class MuscleRig:
 
     # ---------------------------------------------------------------- build
     @staticmethod
-    def _trim_weights(face, frame, local, u, trim, tag: float = 2.0) -> np.ndarray:
+    def _seam_surface(face, local, u, trim) -> np.ndarray:
+        """The lip-trim surface's height (N,) over each vertex: the lips' seams and corners, smoothed."""
         seam = np.concatenate([face.region("lip_seam_upper"), face.region("lip_seam_lower")])
         corners = [face.landmarks["mouth_corner_left"], face.landmarks["mouth_corner_right"]]
         seam = np.unique(np.concatenate([seam, corners]))
-        surface = mf.seam_height(u, u[seam], local[seam, 1], smooth=2.0 * trim["smooth"])  # W -> half-widths (u units)
-        side = np.zeros(len(u))
+        return mf.seam_height(u, u[seam], local[seam, 1], smooth=2.0 * trim["smooth"])  # W -> half-widths (u units)
+
+    @staticmethod
+    def _lip_sides(face) -> np.ndarray:
+        """The lip-trim tag (N,): +1 on the upper lip, -1 on the lower, 0 elsewhere, and over the mouth's lining
+        the lips' tags carried into it (see :func:`~visemeface.muscles.functions.lip_trim_weights`)."""
+        side = np.zeros(face.n_vertices)
         if "upper_lip" in face.regions:
             side[face.regions["upper_lip"]] = 1.0
         if "lower_lip" in face.regions:
@@ -223,9 +230,13 @@ class MuscleRig:
             # half and half while that lip went one way, and the triangles between stretched 4.6 times
             from visemeface.face.multipie import face_edges, harmonic_extension
 
-            lining = np.zeros(len(u), bool)
+            lining = np.zeros(face.n_vertices, bool)
             lining[face.regions["cavity_wall"]] = True
             side = harmonic_extension(face_edges(face.quads, face.tris), side, side != 0, lining & (side == 0))
+        return side
+
+    @staticmethod
+    def _trim_weights(frame, local, u, surface, side, trim, tag: float = 2.0) -> np.ndarray:
         return mf.lip_trim_weights(u, local[:, 1], surface, side, trim["inner_width"] * frame.width,
                                    trim["outer_width"] * frame.width, trim["corner_start"], trim["corner_end"],
                                    tag)

@@ -282,6 +282,7 @@ def _turn_muscle(reader: _RigFileReader, table: Mapping, base: str, side: str, m
             raise reader.error(base, "lids", "needs 0 <= lid_follow <= 2 and lid_radius > 0")
     if mask.any() and side in ("left", "right"):
         x = reader.frame.to_local(reader.face.vertices)[:, 0]
-        m.mask = mask & ((x > 0) if side == "left" else (x < 0))
+        mine = (x > 0) if side == "left" else (x < 0)
+        m.mask = mask & mine
         if m.lids is not None:
-            m.lids = m.lids & ((x > 0) if side == "left" else (x < 0))
+            m.lids = m.lids & mine
