@@ -1,0 +1,67 @@
+"""Figures of a face's rig that the renders depend on, for the default face and the ICT head (JSON lines).
+
+- ``lip_stretch``: the largest stretch (posed / rest edge length) of a lip triangle more than 0.1 mouth widths
+  from either corner over every viseme alone and with each emotion at full weight (1: none; torn: over 3);
+- ``aa_corner_flips``: triangles within 0.15 mouth widths of a corner whose normal turns over on /aa/, and how
+  many of them lie in front of the mouth's lining (``_front``: centroid less than 11 mm behind the lips' front);
+- ``gaze_*``: at a vertical gaze of +1 and -1 (15 degrees), how far the pupil and the upper lid's margin over
+  it move (mm): the lid follows the eye when the two agree.
+
+::
+
+    PYTHONPATH=src python benchmarks/face_figures.py
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+import numpy as np
+
+
+def corner_flips(face, lib) -> tuple[int, int]:
+    T, V, L = face.triangles, face.vertices, face.landmarks
+    corners = V[[L["mouth_corner_left"], L["mouth_corner_right"]]]
+    width = np.linalg.norm(corners[0] - corners[1])
+    near = np.min(np.linalg.norm(V[T].mean(axis=1)[:, None] - corners[None], axis=2), axis=1) / width
+    T = T[near < 0.15]
+
+    def normals(P):
+        return np.cross(P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]])
+
+    flipped = (normals(V) * normals(lib.posed_vertices("aa", None))).sum(axis=1) < 0
+    front = V[T].mean(axis=1)[:, 2] > V[L["upper_lip_mid"], 2] - 0.011
+    return int(flipped.sum()), int((flipped & front).sum())
+
+
+def gaze(rig) -> dict:
+    face, rest = rig.face, rig.face.vertices
+    out = {}
+    for g in (1.0, -1.0):
+        posed = rig.pose({"eye_turn_vertical_left": g, "eye_turn_vertical_right": g})
+        pupil = face.landmarks["eye_centre_left"]
+        lid = face.regions["upper_lids"]
+        lid = lid[np.sign(rest[lid, 0]) == np.sign(rest[pupil, 0])]
+        over = lid[np.abs(rest[lid, 0] - rest[pupil, 0]) < 0.002]
+        margin = over[np.argmin(rest[over, 1])]
+        out[f"gaze_{g:+.0f}_pupil_mm"] = round(1000 * float(posed[pupil, 1] - rest[pupil, 1]), 2)
+        out[f"gaze_{g:+.0f}_lid_margin_mm"] = round(1000 * float(posed[margin, 1] - rest[margin, 1]), 2)
+    return out
+
+
+def main(argv=None) -> None:
+    argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args(argv)
+    from visemeface.face.prepare import lip_stretch
+    from visemeface.muscles.rig import rig_for
+    from visemeface.postures.library import PostureLibrary
+
+    for name in ("procedural", "ict"):
+        rig = rig_for(name)
+        flips, front = corner_flips(rig.face, PostureLibrary(rig))
+        print(json.dumps({"benchmark": "face_figures", "face": name, "lip_stretch": round(lip_stretch(rig.face), 3),
+                          "aa_corner_flips": flips, "aa_corner_flips_front": front, **gaze(rig)}), flush=True)
+
+
+if __name__ == "__main__":
+    main()
