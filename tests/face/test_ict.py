@@ -178,6 +178,16 @@ def test_pose_speaks_on_the_ict_face_from_the_command_line(tmp_path):
     assert p.returncode == 2 and "--identity needs --face ict" in p.stderr and not (tmp_path / "n.png").exists()
 
 
+def test_the_physical_face_on_the_ict_head_is_refused_in_one_line_before_any_work(tmp_path):
+    (tmp_path / "b.txt").write_text("bob")
+    p = subprocess.run([sys.executable, "-m", "visemeface", "speak", "b.txt", "--face", "ict", "--physics", "sticky",
+                        "--gltf", "b.glb"], cwd=tmp_path, capture_output=True, text=True)
+    assert p.returncode == 2, p.stderr
+    err = p.stderr.strip()
+    assert len(err.splitlines()) == 1 and "no 'jaw' region" in err and "--physics none" in err, err
+    assert sorted(f.name for f in tmp_path.iterdir()) == ["b.txt"]
+
+
 def test_a_manifest_gives_each_clip_an_identity_of_the_ict_head(tmp_path):
     from visemeface.batch.manifest import BadRow, read_manifest
 

@@ -54,6 +54,8 @@ LIP_THICKNESS = 0.004
 DEPTH_SMOOTHING = 2
 #: Default rest gap between the lips that the saliva fills (m).
 REST_GAP = 0.001
+#: Regions the FEM needs: the bone side under ``jaw`` turns with the mandible; the saliva bridges the seams.
+PHYSICS_REGIONS = ("jaw", "lip_seam_upper", "lip_seam_lower")
 #: Regions never part of the FEM (they stay kinematic).
 EXCLUDED_REGIONS = ("mouth_cavity", "eyes", "brow", "nose")
 #: Normal-smoothing passes before extrusion (lips and chin curve tighter than 12 mm).
@@ -308,6 +310,12 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
     """
     if not (np.isfinite(thickness) and thickness > 0):
         raise InputError(f"tissue thickness must be > 0, got {thickness}")
+    missing = [n for n in PHYSICS_REGIONS if n not in face.regions]
+    if missing:
+        raise InputError(f"this face has no {' or '.join(repr(n) for n in missing)} region, which the physical "
+                         "face needs (the skin the mandible carries and the lips' contact); the physics runs on "
+                         "the procedural face and on meshes whose landmarks file names these regions; "
+                         "--physics none animates any face")
     mask = fem_quads(face, top=top)
     quads = face.quads[mask]
     pairs = seam_pairs(face)
