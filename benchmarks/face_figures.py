@@ -4,8 +4,8 @@
   from either corner over every viseme alone and with each emotion at full weight (1: none; torn: over 3);
 - ``aa_corner_flips``: triangles within 0.15 mouth widths of a corner whose normal turns over on /aa/, and how
   many of them lie in front of the mouth's lining (``_front``: centroid less than 11 mm behind the lips' front);
-- ``gaze_*``: at a vertical gaze of +1 and -1 (15 degrees), how far the pupil and the upper lid's margin over
-  it move (mm): the lid follows the eye when the two agree.
+- ``gaze_*``: at a vertical gaze of +1 and -1 (15 degrees), how far the pupil and the upper and lower lids'
+  margins over it move (mm): the upper lid follows the eye when the two agree, the lower by about 0.3.
 
 ::
 
@@ -36,17 +36,18 @@ def corner_flips(face, lib) -> tuple[int, int]:
 
 
 def gaze(rig) -> dict:
+    from visemeface.muscles.measure import lid_margin
+
     face, rest = rig.face, rig.face.vertices
     out = {}
     for g in (1.0, -1.0):
         posed = rig.pose({"eye_turn_vertical_left": g, "eye_turn_vertical_right": g})
         pupil = face.landmarks["eye_centre_left"]
-        lid = face.regions["upper_lids"]
-        lid = lid[np.sign(rest[lid, 0]) == np.sign(rest[pupil, 0])]
-        over = lid[np.abs(rest[lid, 0] - rest[pupil, 0]) < 0.002]
-        margin = over[np.argmin(rest[over, 1])]
+        margin, _ = lid_margin(face, "left", "upper")
+        lower, _ = lid_margin(face, "left", "lower")
         out[f"gaze_{g:+.0f}_pupil_mm"] = round(1000 * float(posed[pupil, 1] - rest[pupil, 1]), 2)
         out[f"gaze_{g:+.0f}_lid_margin_mm"] = round(1000 * float(posed[margin, 1] - rest[margin, 1]), 2)
+        out[f"gaze_{g:+.0f}_lower_lid_margin_mm"] = round(1000 * float(posed[lower, 1] - rest[lower, 1]), 2)
     return out
 
 

@@ -273,7 +273,7 @@ def test_a_gaze_whose_lids_follow_from_nowhere_is_refused_naming_the_field(tmp_p
     text = _default_text()
     assert "lid_radius = 0.3" in text
     path = _write(tmp_path, text.replace("lid_radius = 0.3", "lid_radius = -0.3", 1))
-    with pytest.raises(InputError, match="'eye_turn_vertical'.*'lids'.*lid_radius > 0"):
+    with pytest.raises(InputError, match="'eye_turn_vertical'.*'lid_radius'.*must be positive"):
         MuscleRig.from_file(default_rig().face, path)
 
 
@@ -429,8 +429,8 @@ def test_gaze_turns_each_iris_and_nothing_else(rig):
         for name, axis, deg in ((f"eye_turn_horizontal_{side}", 0, 20.0), (f"eye_turn_vertical_{side}", 1, 15.0)):
             b = rig.bases[rig.names.index(name)]
             moved = np.flatnonzero(np.linalg.norm(b, axis=1) > 0)
-            lids = np.intersect1d(face.regions["upper_lids"], this_side)
-            # one eyeball, and for a vertical gaze its upper lid (which follows it), nothing else
+            lids = np.intersect1d(np.union1d(face.regions["upper_lids"], face.regions["lower_lids"]), this_side)
+            # one eyeball, and for a vertical gaze its lids (which follow it), nothing else
             assert np.isin(moved, np.union1d(mine, lids) if axis == 1 else mine).all()
             assert np.isin(moved, lids).any() == (axis == 1)
             # the pupil moves sideways (up) by about r sin(angle), r = 9.5 mm behind the pupil

@@ -13,6 +13,8 @@ from rest (metres): ``protrusion`` (forward motion of the lip mid-points),
 corners; ``corner_height_left``/``_right`` each), ``corner_depth``,
 ``chin_drop``. Contact: ``lip_contact`` (fraction of the central lip seam
 whose lips touch) and ``lips_closed`` (the centre touches).
+
+:func:`lid_margin` finds the eyelid vertex over the pupil, to measure the lids the same way.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ import numpy as np
 
 from visemeface.errors import InputError
 
-__all__ = ["LipGauge", "lip_dimensions", "lip_changes", "inner_opening", "TARGET_DIMENSIONS"]
+__all__ = ["LipGauge", "lip_dimensions", "lip_changes", "inner_opening", "lid_margin", "TARGET_DIMENSIONS"]
 
 #: Dimensions of the viseme target table (``data/visemes/targets.csv``).
 TARGET_DIMENSIONS = ("mouth_width", "opening_height", "protrusion", "upper_lip_raise",
@@ -166,3 +168,16 @@ def inner_opening(face, vertices: np.ndarray, tolerance: float = 2e-4) -> dict:
     right = x[i1] if i1 == len(x) - 1 else x[i1] + (x[i1 + 1] - x[i1]) * gap[i1] / (gap[i1] - gap[i1 + 1])
     width, height = float(right - left), float(gap.max() + tolerance)
     return {"width": width, "height": height, "aspect": width / height}
+
+
+def lid_margin(face, side: str, lid: str = "upper", reach: float = 0.002) -> tuple[int, np.ndarray]:
+    """The ``lid`` ("upper" or "lower") eyelid's margin over the pupil of eye ``side``: (the margin vertex,
+    the lid's vertices of that eye). The margin is the lid vertex within ``reach`` (m) of the pupil's x
+    nearest the eye's opening (the lowest of the upper lid, the highest of the lower)."""
+    rest = face.vertices
+    pupil = face.landmarks[f"eye_centre_{side}"]
+    lids = face.region(f"{lid}_lids")
+    lids = lids[np.sign(rest[lids, 0]) == np.sign(rest[pupil, 0])]
+    over = lids[np.abs(rest[lids, 0] - rest[pupil, 0]) < reach]
+    pick = np.argmin if lid == "upper" else np.argmax
+    return int(over[pick(rest[over, 1])]), lids

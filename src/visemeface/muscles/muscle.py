@@ -45,8 +45,8 @@ class Muscle:
     inner: float | None = None             # "local": a lateral band from this distance (m) instead of a Gaussian
     axis: np.ndarray | None = None         # "turn": rotation axis (world), angle in ``k`` (radians at 1);
     #                                        ``inner`` is then the radius of the part that turns (m)
-    lids: np.ndarray | None = None         # "turn": (N,) bool, lid vertices that follow the turn
-    lid_follow: float = 0.0                # "turn": the lids' share of the angle
+    lids: np.ndarray | None = None         # "turn": (N,) each lid vertex's share of the turn (0: none)
+    lid_follow: float = 0.0                # "turn": a factor on ``lids``' shares
     lid_radius: float | None = None        # "turn": how far from the forward line the lids follow (m)
 
     def field(self, points: np.ndarray, frame: MouthFrame, direction: np.ndarray | None = None) -> np.ndarray:

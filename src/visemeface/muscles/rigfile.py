@@ -254,8 +254,8 @@ def _turn_muscle(reader: _RigFileReader, table: Mapping, base: str, side: str, m
     """Fill a "turn" function (the eyeballs' gaze): its ``regions`` turn about ``axis`` (mouth frame)
     through ``centre`` by ``angle_deg`` at activation 1 (linearised), within ``radius`` (W) of the
     forward line through ``centre`` when given; a face without the regions gets a zero field. ``lids``
-    (regions), ``lid_follow`` (share of the angle, default 1) and ``lid_radius`` (W) make lid vertices turn
-    with it, fading out toward the eye's corners."""
+    (regions), ``lid_follow`` (share of the angle, default 1; one number, or one per ``lids`` region) and
+    ``lid_radius`` (W) make lid vertices turn with it, fading out toward the eye's corners."""
     names = reader.get(table, base, "regions", "regions")
     regions = reader.regions(names, base, "regions")
     m.exclude = ()
@@ -272,17 +272,24 @@ def _turn_muscle(reader: _RigFileReader, table: Mapping, base: str, side: str, m
     m.inner = None if radius is None else radius * reader.frame.width
     m.centre = reader.point(table, base, "centre", side) if mask.any() else np.zeros(3)
     if "lids" in table:
-        lids = np.zeros(len(reader.face.vertices), bool)
-        for region in reader.regions(reader.get(table, base, "lids", "regions"), base, "lids"):
-            lids[reader.face.regions[region]] = True
+        names = reader.regions(reader.get(table, base, "lids", "regions"), base, "lids")
+        follow = table.get("lid_follow", 1.0)
+        follow = follow if isinstance(follow, list) else [follow] * len(names)
+        if len(follow) != len(names) or not all(isinstance(f, (int, float)) and not isinstance(f, bool)
+                                                and 0.0 <= f <= 2.0 for f in follow):
+            raise reader.error(base, "lid_follow", f"expected a share in [0, 2] or one per lids region, got "
+                                                   f"{table.get('lid_follow')!r}")
+        lids = np.zeros(len(reader.face.vertices))
+        for region, share in zip(names, follow):
+            lids[reader.face.regions[region]] = share
         m.lids = lids if mask.any() else np.zeros_like(lids)
-        m.lid_follow = reader.get(table, base, "lid_follow", float, 1.0)
+        m.lid_follow = 1.0
         m.lid_radius = reader.get(table, base, "lid_radius", float) * reader.frame.width
-        if not (0.0 <= m.lid_follow <= 2.0 and m.lid_radius > 0):
-            raise reader.error(base, "lids", "needs 0 <= lid_follow <= 2 and lid_radius > 0")
+        if not m.lid_radius > 0:
+            raise reader.error(base, "lid_radius", "must be positive")
     if mask.any() and side in ("left", "right"):
         x = reader.frame.to_local(reader.face.vertices)[:, 0]
         mine = (x > 0) if side == "left" else (x < 0)
         m.mask = mask & mine
         if m.lids is not None:
-            m.lids = m.lids & mine
+            m.lids = m.lids * mine
