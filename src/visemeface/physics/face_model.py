@@ -33,7 +33,7 @@ import numpy as np
 
 from visemeface.errors import InputError
 from visemeface.face.mesh import FaceMesh
-from visemeface.physics.hexmesh import HexMesh, extrude_quads
+from visemeface.physics.hexmesh import HexMesh, check_quality, extrude_quads
 from visemeface.physics.hexmesh import smooth_on_quads as _smooth_on_quads
 from visemeface.physics.hexmesh import smoothed_normals
 from visemeface.physics.bone import relax_bone_side
@@ -310,12 +310,7 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
     """
     if not (np.isfinite(thickness) and thickness > 0):
         raise InputError(f"tissue thickness must be > 0, got {thickness}")
-    missing = [n for n in PHYSICS_REGIONS if n not in face.regions]
-    if missing:
-        raise InputError(f"this face has no {' or '.join(repr(n) for n in missing)} region, which the physical "
-                         "face needs (the skin the mandible carries and the lips' contact); the physics runs on "
-                         "the procedural face and on meshes whose landmarks file names these regions; "
-                         "--physics none animates any face")
+    _check_regions(face)
     mask = fem_quads(face, top=top)
     quads = face.quads[mask]
     pairs = seam_pairs(face)
@@ -347,7 +342,6 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
 
     mesh = HexMesh(tissue.nodes, hexes, material=material, node_sets=_bone_sets(face, tissue, layers),
                    surface_vertices=tissue.surface_vertices)
-    from visemeface.physics.hexmesh import check_quality
     check_quality(mesh, max_aspect=None)
     saliva = np.arange(len(tissue.hexes), len(hexes))
     corners, corner_s = _corner_wedges(face, pairs, node_of, seam_s, S, saliva_layers)
@@ -357,6 +351,15 @@ def build_fem_face(face: FaceMesh, thickness: float = TISSUE_THICKNESS, layers: 
                    seam_pairs=pairs, seam_s=seam_s, mouth_width=width,
                    depth_fraction=depth_fraction, lip_weight=lip_w,
                    corner_hexes=corners, corner_s=corner_s)
+
+
+def _check_regions(face: FaceMesh) -> None:
+    missing = [n for n in PHYSICS_REGIONS if n not in face.regions]
+    if missing:
+        raise InputError(f"this face has no {' or '.join(repr(n) for n in missing)} region, which the physical "
+                         "face needs (the skin the mandible carries and the lips' contact); the physics runs on "
+                         "the procedural face and on meshes whose landmarks file names these regions; "
+                         "--physics none animates any face")
 
 
 def _tissue(face: FaceMesh, quads, pairs, thickness, layers: int, lip_thickness, saliva_depth):
