@@ -1,4 +1,4 @@
-"""The default face's eyes at rest look like a person's: lids over the iris, no stare."""
+"""The eyes at rest look like a person's (the default face, and the ICT head where said): lids over the iris, no stare."""
 
 from __future__ import annotations
 
@@ -37,16 +37,17 @@ def _eye(front, face, side):
     return u, v, (u2 - u) / 0.01
 
 
-def _sclera_above_iris(front, face, vertices):
+def _sclera_above_iris(front, face, vertices, iris_r=None):
     """Eye-white pixels over the top of each iris (the middle half of its width), both eyes."""
     from visemeface.face.shape import _IRIS_R
 
+    iris_r = _IRIS_R if iris_r is None else iris_r
     img = front.render(vertices)
     white = _sclera(img)
     count = 0
     for side in ("left", "right"):
         u, v, k = _eye(front, face, side)
-        r = _IRIS_R * k
+        r = iris_r * k
         band = white[int(v - 1.8 * r):int(v - 0.8 * r), int(u - 0.5 * r):int(u + 0.5 * r) + 1]
         count += int(band.sum())
     return count
@@ -58,6 +59,19 @@ def test_no_sclera_above_the_iris_at_rest_but_with_au5(rig, front):
     # the measure can fail: the upper lid raised (AU5, the stare) bares the white above the iris
     wide = rig.pose({"upper_lid_raise_left": 1.0, "upper_lid_raise_right": 1.0})
     assert _sclera_above_iris(front, face, wide) > 10
+
+
+def test_no_sclera_above_the_iris_on_the_ict_head_at_rest_but_with_au5():
+    """The same measure on the scanned head, whose eyes and lids were made by others."""
+    from visemeface.face.ict import IRIS_RADIUS
+    from visemeface.muscles.rig import rig_for
+    from visemeface.render.renderer import Renderer
+
+    rig = rig_for("ict")
+    with Renderer(rig.face, size=SIZE, view="face") as r:
+        assert _sclera_above_iris(r, rig.face, rig.face.vertices, IRIS_RADIUS) == 0
+        wide = rig.pose({"upper_lid_raise_left": 1.0, "upper_lid_raise_right": 1.0})
+        assert _sclera_above_iris(r, rig.face, wide, IRIS_RADIUS) > 10
 
 
 def test_iris_is_an_adults_and_the_lids_sit_on_it(rig, front):
