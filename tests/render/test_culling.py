@@ -63,3 +63,25 @@ def test_culling_is_off_with_multisampling():
     rig = MuscleRig.from_file(face)
     with Renderer(face, size=64, samples=4, still=rig.still_vertices()) as r:
         assert r.vao_shown is None or r.samples <= 1
+
+
+def test_icts_enclosed_iris_shells_are_never_drawn_and_no_pixel_changes():
+    """ICT's iris shells lie inside its eyes' outer shells, on which the iris is painted: left out of the draw
+    they change no pixel, looking anywhere, with the lids wide."""
+    import copy
+
+    rig = MuscleRig.from_file(ict_face())
+    face = rig.face
+    enclosed = face.regions["enclosed"]
+    assert np.isin(enclosed, face.regions["eyeballs"]).all() and len(enclosed) == 1600
+    whole = copy.deepcopy(face)
+    del whole.regions["enclosed"]
+    gazes = [rig.activation_vector(**{f"eye_turn_{d}_{s}": g for s in ("left", "right")},
+                                   **{f"upper_lid_raise_{s}": 1.0 for s in ("left", "right")})
+             for d in ("vertical", "horizontal") for g in (-1.0, 1.0)]
+    with Renderer(face, size=SIZE, view="face", samples=0) as r, \
+            Renderer(whole, size=SIZE, view="face", samples=0) as every:
+        assert len(r._triangles) == len(face.triangles) - 3192 and len(every._triangles) == len(face.triangles)
+        for a in gazes:
+            v = np.asarray(rig.pose(a), dtype=np.float32)
+            np.testing.assert_array_equal(r.render(v), every.render(v))

@@ -73,6 +73,8 @@ def _regions_and_landmarks(V, quads, tris, lm68) -> tuple[dict, dict]:
     eyeballs = np.concatenate([p["eyeball_left"], p["eyeball_right"]])
     regions["eyeballs"] = eyeballs
     regions["eyes"] = eyeballs
+    # the iris shells inside the outer shells (the iris is painted on the outer one): no camera sees them
+    regions["enclosed"] = np.concatenate([p[f"eyeball_{s}"][_OUTER_SHELL:] for s in ("left", "right")])
     regions.update(lid_regions(V, face_part, lm68))
     # the mouth interior
     teeth = p["teeth"]

@@ -196,7 +196,10 @@ class Renderer:
         self.size = _check_size(size)
         self.view = view
         self.projection = projection
-        self._triangles = np.ascontiguousarray(face.triangles, dtype=np.int32)
+        tris = face.triangles
+        if "enclosed" in face.regions:      # parts inside others (ICT's iris shells): never drawn
+            tris = tris[~np.isin(tris, face.regions["enclosed"]).all(axis=1)]
+        self._triangles = np.ascontiguousarray(tris, dtype=np.int32)
         self._normals = face.normal_accumulator()
         self._setup_camera()
         self._setup_gl(samples)
