@@ -277,6 +277,20 @@ def test_a_gaze_whose_lids_follow_from_nowhere_is_refused_naming_the_field(tmp_p
         MuscleRig.from_file(default_rig().face, path)
 
 
+def test_lid_shares_one_per_lids_region_or_refused_naming_the_field(tmp_path):
+    text = _default_text()
+    assert "lid_follow = [1.0, 0.3]" in text
+    for bad in ("[1.0]", "[1.0, 3.0]", '"x"'):
+        path = _write(tmp_path, text.replace("lid_follow = [1.0, 0.3]", f"lid_follow = {bad}", 1))
+        with pytest.raises(InputError, match="'eye_turn_vertical'.*'lid_follow'.*one per lids region"):
+            MuscleRig.from_file(default_rig().face, path)
+    # one number for every lids region
+    rig = MuscleRig.from_file(default_rig().face,
+                              _write(tmp_path, text.replace("lid_follow = [1.0, 0.3]", "lid_follow = 1.0", 1)))
+    m = next(m for m in rig.muscles if m.name == "eye_turn_vertical_left")
+    assert set(np.unique(m.lids)) == {0.0, 1.0}
+
+
 def test_rig_file_syntax_and_missing(tmp_path):
     face = default_rig().face
     with pytest.raises(InputError, match="not valid TOML"):
