@@ -14,8 +14,9 @@ out as some other error, or not at all). Once the command works, the first
 signal unwinds as ``KeyboardInterrupt``, so temporary outputs are removed;
 whatever error that unwinding ends in, the interrupt is reported, and a second
 signal meanwhile ends the process at once. After the work (the interpreter's
-shutdown) a signal ends it at once too. This module imports nothing else at
-its top (errors.py is light).
+shutdown) a signal ends it at once too, with the command's own status: its
+outputs are whole. This module imports nothing else at its top (errors.py is
+light).
 """
 
 from __future__ import annotations
@@ -88,8 +89,8 @@ def _take_signals(handler):
 def main(argv: list[str] | None = None) -> int:
     """Run the command line ``argv`` (default ``sys.argv[1:]``); returns the exit status.
 
-    As the program (``argv`` None) a signal before the command runs, or after it is done, ends the process
-    at once with the interrupted line and 130; called with ``argv`` (tests, scripts) a signal raises
+    As the program (``argv`` None) a signal before the command runs ends the process at once with the
+    interrupted line and 130, and one after it is done at once with its status; called with ``argv`` (tests, scripts) a signal raises
     KeyboardInterrupt throughout, and the caller's handlers are put back.
     """
     global _received
@@ -126,12 +127,17 @@ def interrupted_line(text: str = INTERRUPTED) -> None:
 def _end(status: int):
     """End the program with ``status`` once its exit functions have run, not through the interpreter's own
     shutdown: a signal in that window (tens of ms after the work) met Python's default handlers, and the
-    process died by it (rc -2, -15) with no line, though its outputs were complete."""
+    process died by it (rc -2, -15) with no line, though its outputs were complete. A signal now ends it at
+    once with ``status`` and says nothing: the work is done and its outputs are whole (reported as interrupted,
+    a run whose outputs were all written read as one that had stopped part way)."""
     import atexit
     import os
 
+    def done(signum=None, frame=None):
+        os._exit(status)
+
     for s in _SIGNALS:
-        signal.signal(s, _exit_now)
+        signal.signal(s, done)
     try:
         atexit._run_exitfuncs()
         sys.stdout.flush()

@@ -37,3 +37,15 @@ def test_simulate_help_gives_the_speech_lips_tissue_limit_the_code_uses(capsys):
         main(["simulate", "--help"])
     out = " ".join(capsys.readouterr().out.split())
     assert f"stretch of {TISSUE_LIMIT:g} (Gent)" in out and f"default {TISSUE_LIMIT:g}" in out
+
+
+@pytest.mark.parametrize("status", [0, 2])
+def test_a_signal_after_the_work_ends_with_the_commands_own_status_and_says_nothing(status):
+    """Once a command's work is done (its outputs whole), a Ctrl-C in the last milliseconds of the process
+    (its exit functions) must not report the run as interrupted: 130 there read as a run stopped part way."""
+    code = ("import atexit, os, signal, time\n"
+            "from visemeface import cli\n"
+            "atexit.register(lambda: (os.kill(os.getpid(), signal.SIGINT), time.sleep(5)))\n"
+            f"cli._end({status})\n")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert p.returncode == status and "interrupted" not in p.stderr, (p.returncode, p.stderr)
