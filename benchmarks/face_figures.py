@@ -39,12 +39,11 @@ def gaze(rig) -> dict:
     from visemeface.muscles.measure import lid_margin
 
     face, rest = rig.face, rig.face.vertices
+    pupil = face.landmarks["eye_centre_left"]
+    (margin, _), (lower, _) = lid_margin(face, "left", "upper"), lid_margin(face, "left", "lower")
     out = {}
     for g in (1.0, -1.0):
         posed = rig.pose({"eye_turn_vertical_left": g, "eye_turn_vertical_right": g})
-        pupil = face.landmarks["eye_centre_left"]
-        margin, _ = lid_margin(face, "left", "upper")
-        lower, _ = lid_margin(face, "left", "lower")
         out[f"gaze_{g:+.0f}_pupil_mm"] = round(1000 * float(posed[pupil, 1] - rest[pupil, 1]), 2)
         out[f"gaze_{g:+.0f}_lid_margin_mm"] = round(1000 * float(posed[margin, 1] - rest[margin, 1]), 2)
         out[f"gaze_{g:+.0f}_lower_lid_margin_mm"] = round(1000 * float(posed[lower, 1] - rest[lower, 1]), 2)

@@ -90,8 +90,8 @@ def main(argv: list[str] | None = None) -> int:
     """Run the command line ``argv`` (default ``sys.argv[1:]``); returns the exit status.
 
     As the program (``argv`` None) a signal before the command runs ends the process at once with the
-    interrupted line and 130, and one after it is done at once with its status; called with ``argv`` (tests, scripts) a signal raises
-    KeyboardInterrupt throughout, and the caller's handlers are put back.
+    interrupted line and 130, and one after it is done at once with its status; called with ``argv`` (tests,
+    scripts) a signal raises KeyboardInterrupt throughout, and the caller's handlers are put back.
     """
     global _received
     _received = False

@@ -367,7 +367,7 @@ def local_displacement(points: np.ndarray, centre, radii, direction, mask: np.nd
 
 def turn_displacement(points: np.ndarray, centre, axis, angle: float, mask: np.ndarray,
                       radius: float | None = None, view=(0.0, 0.0, 1.0), lids: np.ndarray | None = None,
-                      lid_follow: float = 0.0, lid_radius: float | None = None) -> np.ndarray:
+                      lid_radius: float | None = None) -> np.ndarray:
     r"""A small rotation (N, 3) of the vertices in ``mask`` about ``axis`` through ``centre``, linearised:
 
     .. math:: \Delta\mathbf p = w\,\theta\,\mathbf k \times (\mathbf p - \mathbf c),
@@ -377,11 +377,11 @@ def turn_displacement(points: np.ndarray, centre, axis, angle: float, mask: np.n
     from 1 at 0.7 ``radius`` to 0 at ``radius``): the iris slides over the sclera,
     and the eyeball's wide sides stay under the lids.
 
-    With ``lids`` (a mask) the lid vertices turn too, by ``lid_follow`` of the angle about the same centre,
-    so they slide over the globe with it, fading from full at half ``lid_radius`` from that line to none at
-    ``lid_radius`` (the eye's corners, held by the canthal tendons, barely move): the upper lid follows
-    vertical gaze about one to one (Becker & Fuchs 1988), so looking up or down neither bares the white
-    above the iris nor drives the lid through it.
+    With ``lids`` ((N,) each vertex's share of the angle, 0 off the lids) the lid vertices turn too, by
+    their share, about the same centre, so they slide over the globe with it, fading from full at half
+    ``lid_radius`` from that line to none at ``lid_radius`` (the eye's corners, held by the canthal tendons,
+    barely move): the upper lid follows vertical gaze about one to one (Becker & Fuchs 1988), so looking up
+    or down neither bares the white above the iris nor drives the lid through it.
     """
     points = np.asarray(points, dtype=float)
     k = _unit(axis)
@@ -391,6 +391,6 @@ def turn_displacement(points: np.ndarray, centre, axis, angle: float, mask: np.n
     w = np.asarray(mask, dtype=float)
     if radius is not None:
         w = w * smoothstep(radius, 0.7 * radius, d)
-    if lids is not None and lid_follow and lid_radius:
-        w = w + float(lid_follow) * np.asarray(lids, dtype=float) * smoothstep(lid_radius, 0.5 * lid_radius, d)
+    if lids is not None and lid_radius:
+        w = w + np.asarray(lids, dtype=float) * smoothstep(lid_radius, 0.5 * lid_radius, d)
     return float(angle) * np.cross(k, r) * w[:, None]

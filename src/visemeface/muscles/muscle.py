@@ -46,14 +46,13 @@ class Muscle:
     axis: np.ndarray | None = None         # "turn": rotation axis (world), angle in ``k`` (radians at 1);
     #                                        ``inner`` is then the radius of the part that turns (m)
     lids: np.ndarray | None = None         # "turn": (N,) each lid vertex's share of the turn (0: none)
-    lid_follow: float = 0.0                # "turn": a factor on ``lids``' shares
     lid_radius: float | None = None        # "turn": how far from the forward line the lids follow (m)
 
     def field(self, points: np.ndarray, frame: MouthFrame, direction: np.ndarray | None = None) -> np.ndarray:
         """Untrimmed displacement (N, 3) at activation 1 (a local function's ``direction`` may be replaced)."""
         if self.kind == "turn":
             return mf.turn_displacement(points, self.centre, self.axis, self.k, self.mask, self.inner,
-                                        frame.axes[2], self.lids, self.lid_follow, self.lid_radius)
+                                        frame.axes[2], self.lids, self.lid_radius)
         if self.kind == "local":
             if self.mask is None or not self.mask.any():
                 return np.zeros_like(np.asarray(points, dtype=float))

@@ -283,7 +283,6 @@ def _turn_muscle(reader: _RigFileReader, table: Mapping, base: str, side: str, m
         for region, share in zip(names, follow):
             lids[reader.face.regions[region]] = share
         m.lids = lids if mask.any() else np.zeros_like(lids)
-        m.lid_follow = 1.0
         m.lid_radius = reader.get(table, base, "lid_radius", float) * reader.frame.width
         if not m.lid_radius > 0:
             raise reader.error(base, "lid_radius", "must be positive")
