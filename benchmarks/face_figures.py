@@ -20,21 +20,6 @@ import json
 import numpy as np
 
 
-def corner_flips(face, lib) -> tuple[int, int]:
-    T, V, L = face.triangles, face.vertices, face.landmarks
-    corners = V[[L["mouth_corner_left"], L["mouth_corner_right"]]]
-    width = np.linalg.norm(corners[0] - corners[1])
-    near = np.min(np.linalg.norm(V[T].mean(axis=1)[:, None] - corners[None], axis=2), axis=1) / width
-    T = T[near < 0.15]
-
-    def normals(P):
-        return np.cross(P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]])
-
-    flipped = (normals(V) * normals(lib.posed_vertices("aa", None))).sum(axis=1) < 0
-    front = V[T].mean(axis=1)[:, 2] > V[L["upper_lip_mid"], 2] - 0.011
-    return int(flipped.sum()), int((flipped & front).sum())
-
-
 def gaze(rig) -> dict:
     from visemeface.muscles.measure import lid_margin
 
@@ -53,12 +38,13 @@ def gaze(rig) -> dict:
 def main(argv=None) -> None:
     argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args(argv)
     from visemeface.face.prepare import lip_stretch
+    from visemeface.muscles.measure import corner_folds
     from visemeface.muscles.rig import rig_for
     from visemeface.postures.library import PostureLibrary
 
     for name in ("procedural", "ict"):
         rig = rig_for(name)
-        flips, front = corner_flips(rig.face, PostureLibrary(rig))
+        flips, front = corner_folds(rig.face, PostureLibrary(rig).posed_vertices("aa", None))
         print(json.dumps({"benchmark": "face_figures", "face": name, "lip_stretch": round(lip_stretch(rig.face), 3),
                           "aa_corner_flips": flips, "aa_corner_flips_front": front, **gaze(rig)}), flush=True)
 

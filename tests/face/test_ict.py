@@ -75,6 +75,25 @@ def test_no_viseme_or_emotion_tears_icts_lips():
     assert lip_stretch(ict_face()) < 3.0
 
 
+def test_icts_mouth_corners_move_as_one_piece_and_no_pose_folds_them(ict_rig):
+    """The scan's lip rows converge on each corner 0.1-0.2 mm apart, so any difference in their motion turned the
+    triangles between them over: 64 beside the corners on /aa/ (the upper lip's corners hooked down). Moved as one
+    piece near the corner (the modiolus), no viseme, nor /aa/ or /uw/ with any emotion, turns one over."""
+    from visemeface.muscles.measure import corner_folds
+    from visemeface.muscles.rig import MuscleRig
+    from visemeface.postures.library import PostureLibrary
+
+    lib = PostureLibrary(ict_rig)
+    poses = [(v, None) for v in lib.visemes.index] + [(v, e) for v in ("aa", "uw") for e in lib.expressions.index]
+    folded = {f"{v}+{e}": n for v, e in poses
+              if (n := corner_folds(ict_rig.face, lib.posed_vertices(v, {e: 1.0} if e else None))[0])}
+    assert not folded, folded
+    bare = ict_face()
+    bare.rig_defaults = {k: v for k, v in bare.rig_defaults.items() if k != "modiolus"}
+    unblended = PostureLibrary(MuscleRig.from_file(bare))
+    assert corner_folds(bare, unblended.posed_vertices("aa", None))[0] > 30      # the cause, shown
+
+
 def test_a_harmonic_map_over_a_path_is_linear_and_an_island_keeps_its_value():
     from visemeface.face.multipie import harmonic_extension
 

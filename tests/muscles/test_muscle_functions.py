@@ -194,3 +194,26 @@ def test_jaw_rotation_is_rigid_rotation_with_unit_weight():
 def test_jaw_centre_weight():
     w = mf.jaw_centre_weight(np.array([0.0, 0.5, 1.0, -1.0, 2.0, 3.0]), reach=2.0)
     np.testing.assert_allclose(w, [1.0, np.cos(np.pi / 8) ** 2, 0.5, 0.5, 0.0, 0.0], atol=1e-15)
+
+
+def test_the_modiolus_moves_a_corner_as_one_piece_and_leaves_the_rest():
+    """Two lips that move apart (+y above, -y below) meet at a corner: blended, every vertex of the corner's core
+    moves alike (no row can pass its neighbour), the share falls monotonically, and beyond the radius and on the
+    held vertices the fields are unchanged."""
+    p = grid(n=61, half=0.03)
+    corner = np.array([0.0, 0.0, 0.0])
+    radius, core = 0.01, 0.3
+    s = mf.modiolus_share(p, corner, radius, core)
+    d = np.linalg.norm(p - corner, axis=1)
+    assert np.all(s[d <= core * radius] == 1.0) and np.all(s[d >= radius] == 0.0)
+    order = np.argsort(d)
+    assert np.all(np.diff(s[order]) <= 1e-12)
+    apart = np.where(p[:, 1] >= 0, 1.0, -1.0)[:, None] * np.array([0.0, 0.002, 0.0])
+    jaw = (p[:, 1] < 0).astype(float)
+    held = p[:, 0] > 0.02
+    b, j = mf.modiolus_blend(p, apart[None], jaw, [corner], radius, core, held)
+    inner = s >= 1.0
+    assert np.ptp(b[0, inner], axis=0).max() < 1e-15 and np.ptp(j[inner]) < 1e-15
+    assert abs(j[inner][0] - jaw[inner].mean()) < 1e-12
+    untouched = (d >= radius) | held
+    assert np.array_equal(b[0, untouched], apart[untouched]) and np.array_equal(j[untouched], jaw[untouched])

@@ -449,3 +449,13 @@ def test_gaze_turns_each_iris_and_nothing_else(rig):
             assert np.isin(moved, lids).any() == (axis == 1)
             # the pupil moves sideways (up) by about r sin(angle), r = 9.5 mm behind the pupil
             assert b[pupil, axis] == pytest.approx(0.0095 * np.radians(deg), rel=0.1)
+
+
+def test_a_modiolus_table_is_checked_naming_its_field(tmp_path):
+    text = _default_text()
+    for table, message in (('radius = -0.2\ncore = 0.3', "'radius'.*must be positive"),
+                           ('radius = 0.2\ncore = 1.5', "'core'.*must be in"),
+                           ('radius = 0.2\ncore = 0.3\nexclude = ["teeth_typo"]', "unknown region 'teeth_typo'")):
+        path = _write(tmp_path, text.replace("version = 1\n", f"version = 1\n\n[modiolus]\n{table}\n", 1))
+        with pytest.raises(InputError, match=message):
+            MuscleRig.from_file(default_rig().face, path)

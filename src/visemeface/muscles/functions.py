@@ -24,6 +24,8 @@ __all__ = [
     "jaw_rotation_displacement",
     "local_displacement",
     "turn_displacement",
+    "modiolus_share",
+    "modiolus_blend",
 ]
 
 
@@ -257,6 +259,36 @@ def lip_trim_weights(u: np.ndarray, v: np.ndarray, surface_v: np.ndarray, side: 
     width = inner_width + (outer_width - inner_width) * c
     t = (np.asarray(v, dtype=float) - surface_v) / width + tag * np.asarray(side, dtype=float) * (1.0 - c)
     return smoothstep(-1.0, 1.0, t)
+
+
+def modiolus_share(points: np.ndarray, corner, radius: float, core: float = 0.3) -> np.ndarray:
+    r"""Each vertex's share (N,) of a mouth corner's common motion: 1 within ``core`` x ``radius`` of the
+    corner ``corner`` (a point), falling as a smoothstep to 0 at ``radius`` (metres).
+
+    At each corner the muscles of the cheek and lips (zygomatic major, risorius, the depressor and
+    levator anguli oris, buccinator, orbicularis oris) insert into one fibromuscular knot, the modiolus,
+    about 1 cm across and 1 cm lateral to the corner, that moves as a unit (Standring 2016, *Gray's
+    Anatomy*): the skin of the upper and the lower lip converges on it and goes with it. A rig field
+    blended toward the corner's own over this share, :math:`(1-s)\,f + s\,\bar f`, moves the corner as
+    one piece, so the lips' rows that converge there (a fraction of a millimetre apart on a dense scan)
+    cannot pass each other and fold.
+    """
+    d = np.linalg.norm(np.asarray(points, dtype=float) - np.asarray(corner, dtype=float), axis=1)
+    return smoothstep(radius, core * radius, d)
+
+
+def modiolus_blend(points: np.ndarray, bases: np.ndarray, jaw_weight: np.ndarray, corners, radius: float,
+                   core: float, held: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Fields ``bases`` (K, N, 3) and the jaw's weight (N,) blended about each of ``corners`` toward the mean
+    over the corner's core (:func:`modiolus_share`); the vertices ``held`` ((N,) bool: teeth, tongue, eyes)
+    keep their own."""
+    for corner in corners:
+        s = modiolus_share(points, corner, radius, core)
+        s[held] = 0.0
+        inner = s >= 1.0
+        bases = bases * (1.0 - s)[None, :, None] + s[None, :, None] * bases[:, inner].mean(axis=1)[:, None, :]
+        jaw_weight = jaw_weight * (1.0 - s) + s * jaw_weight[inner].mean()
+    return bases, jaw_weight
 
 
 def jaw_centre_weight(u: np.ndarray, reach: float) -> np.ndarray:

@@ -14,7 +14,8 @@ corners; ``corner_height_left``/``_right`` each), ``corner_depth``,
 ``chin_drop``. Contact: ``lip_contact`` (fraction of the central lip seam
 whose lips touch) and ``lips_closed`` (the centre touches).
 
-:func:`lid_margin` finds the eyelid vertex over the pupil, to measure the lids the same way.
+:func:`lid_margin` finds the eyelid vertex over the pupil, to measure the lids the same way;
+:func:`corner_folds` counts the triangles beside the mouth corners that a pose turns over.
 """
 
 from __future__ import annotations
@@ -23,7 +24,8 @@ import numpy as np
 
 from visemeface.errors import InputError
 
-__all__ = ["LipGauge", "lip_dimensions", "lip_changes", "inner_opening", "lid_margin", "TARGET_DIMENSIONS"]
+__all__ = ["LipGauge", "lip_dimensions", "lip_changes", "inner_opening", "lid_margin", "corner_folds",
+           "TARGET_DIMENSIONS"]
 
 #: Dimensions of the viseme target table (``data/visemes/targets.csv``).
 TARGET_DIMENSIONS = ("mouth_width", "opening_height", "protrusion", "upper_lip_raise",
@@ -181,3 +183,22 @@ def lid_margin(face, side: str, lid: str = "upper", reach: float = 0.002) -> tup
     over = lids[np.abs(rest[lids, 0] - rest[pupil, 0]) < reach]
     pick = np.argmin if lid == "upper" else np.argmax
     return int(over[pick(rest[over, 1])]), lids
+
+
+def corner_folds(face, vertices: np.ndarray, reach: float = 0.15, behind: float = 0.011) -> tuple[int, int]:
+    """Triangles within ``reach`` mouth widths of either mouth corner whose normal turns over (more than 90°
+    from rest) in the posed ``vertices`` (N, 3), and how many of them lie in front of the mouth's lining (the
+    centroid less than ``behind`` metres behind the upper lip's front; the others are inside the mouth)."""
+    T, V, L = face.triangles, face.vertices, face.landmarks
+    corners = V[[L["mouth_corner_left"], L["mouth_corner_right"]]]
+    width = np.linalg.norm(corners[0] - corners[1])
+    centroids = V[T].mean(axis=1)
+    near = np.min(np.linalg.norm(centroids[:, None] - corners[None], axis=2), axis=1) / width
+    T, centroids = T[near < reach], centroids[near < reach]
+
+    def normals(P):
+        return np.cross(P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]])
+
+    turned = (normals(V) * normals(np.asarray(vertices, dtype=float))).sum(axis=1) < 0
+    front = centroids[:, 2] > V[L["upper_lip_mid"], 2] - behind
+    return int(turned.sum()), int((turned & front).sum())

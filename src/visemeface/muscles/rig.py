@@ -106,7 +106,7 @@ class MuscleRig:
     """
 
     def __init__(self, face, muscles: list[Muscle], jaw: dict, trim: dict, frame: MouthFrame,
-                 path: Path | None = None):
+                 path: Path | None = None, modiolus: dict | None = None):
         self.face = face
         self.muscles = muscles
         self.frame, self.path = frame, path
@@ -147,6 +147,14 @@ class MuscleRig:
             jw[face.regions[region]] = 1.0      # lower teeth, gum and tongue turn with the mandible
         for region in jaw["exclude"]:
             jw[face.regions[region]] = 0.0
+        self.modiolus = modiolus
+        if modiolus:
+            held = np.zeros(len(rest), bool)
+            for region in modiolus["exclude"]:
+                held[face.regions[region]] = True
+            corners = [face.landmark_position(n) for n in ("mouth_corner_left", "mouth_corner_right")]
+            self.bases, jw = mf.modiolus_blend(rest, bases, jw, corners, modiolus["radius"] * frame.width,
+                                               modiolus["core"], held)
         self.jaw_weight = jw
         self.jaw_joints = (face.landmark_position(jaw["joints"][0]), face.landmark_position(jaw["joints"][1]))
         self.max_jaw_angle = jaw["max_angle"]
@@ -298,7 +306,7 @@ class MuscleRig:
         jaw["rigid"] = reader.regions(reader.get(j, "jaw", "rigid", "regions", ()), "jaw", "rigid")
         if jaw["reach"] <= 0:
             raise reader.error("jaw", "reach", f"must be positive, got {jaw['reach']}")
-        return cls(face, muscles, jaw, trim, frame, path)
+        return cls(face, muscles, jaw, trim, frame, path, modiolus=reader.modiolus())
 
     # -------------------------------------------------------- activations
     def muscle(self, name: str) -> Muscle:

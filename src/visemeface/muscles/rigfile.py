@@ -66,6 +66,24 @@ class _RigFileReader:
             return tuple(value)
         raise AssertionError(kind)
 
+    def modiolus(self) -> dict | None:
+        """The optional ``[modiolus]`` table (``radius`` in W, ``core``, ``exclude``) over the face's own
+        (:attr:`~visemeface.face.mesh.FaceMesh.rig_defaults`); None without either (the corners are not
+        blended)."""
+        t = self.data.get("modiolus")
+        if t is not None and not isinstance(t, Mapping):
+            raise self.error("modiolus", "modiolus", "expected a table")
+        t = {**getattr(self.face, "rig_defaults", {}).get("modiolus", {}), **(t or {})}
+        if not t:
+            return None
+        out = {"radius": self.get(t, "modiolus", "radius", float), "core": self.get(t, "modiolus", "core", float),
+               "exclude": self.regions(self.get(t, "modiolus", "exclude", "regions", ()), "modiolus", "exclude")}
+        if out["radius"] <= 0:
+            raise self.error("modiolus", "radius", f"must be positive, got {out['radius']}")
+        if not 0 < out["core"] < 1:
+            raise self.error("modiolus", "core", f"must be in (0, 1), got {out['core']}")
+        return out
+
     def regions(self, names, entry: str, fld: str) -> tuple:
         """The region names the face has; a name neither on the face nor in the
         conventions' list is an error (a typo), a conventional one the face lacks

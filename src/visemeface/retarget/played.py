@@ -101,7 +101,9 @@ class ReferenceFit:
         from scipy.optimize import minimize_scalar
 
         wk = np.asarray(weights, dtype=np.float64)
+        # rest (jaw 0) is tried too: a frame at rest is posed at rest exactly, not the refinement's tolerance off it
         grid = np.linspace(*self.jaw_range, JAW_GRID + 1)
+        grid = np.union1d(grid, [0.0]) if self.jaw_range[0] <= 0.0 <= self.jaw_range[1] else grid
         last = [None]                           # each solve starts from the last one's active set
 
         def error(jaw):
