@@ -82,6 +82,24 @@ def test_round_trip(tmp_path, small_face, suffix):
     assert np.abs(back.vertex_colors() - small_face.vertex_colors()).max() <= 1 / 255 + 1e-6
 
 
+def test_rig_defaults_travel_with_the_face_and_a_hand_written_sidecar_gets_a_meshs(tmp_path, small_face):
+    """A saved face keeps its own rig defaults (the procedural face none: it poses the same saved and
+    loaded); a sidecar written by hand, without them, gets a mesh's (the mouth corners as one piece)."""
+    from visemeface.face.mesh import MESH_RIG_DEFAULTS
+
+    small_face.rig_defaults = {"jaw": {"neck_fade_deg": 30.0}}
+    small_face.save(tmp_path / "a.obj")
+    assert load_face(tmp_path / "a.obj").rig_defaults == {"jaw": {"neck_fade_deg": 30.0}}
+    small_face.rig_defaults = {}
+    small_face.save(tmp_path / "b.obj")
+    assert load_face(tmp_path / "b.obj").rig_defaults == {}
+    side = tmp_path / "b.landmarks.json"
+    data = json.loads(side.read_text())
+    del data["rig_defaults"]
+    side.write_text(json.dumps(data))
+    assert load_face(tmp_path / "b.obj").rig_defaults == MESH_RIG_DEFAULTS
+
+
 def test_save_refuses_overwrite_without_force(tmp_path, small_face):
     path = tmp_path / "f.ply"
     small_face.save(path)
@@ -161,6 +179,7 @@ def test_corrupt_mesh(tmp_path):
     ('{"landmarks": {"chin": "here"}}', "'chin': expected a vertex index"),
     ('{"landmarks": {}, "regions": {"jaw": [0, -4]}}', "region 'jaw'"),
     ('{"landmarks": {}, "n_vertices": 12}', "mesh of 12 vertices"),
+    ('{"landmarks": {}, "rig_defaults": {"modiolus": 0.2}}', "'rig_defaults' must map rig-file tables"),
 ])
 def test_bad_sidecar(tmp_path, small_face, text, message):
     small_face.save(tmp_path / "f.ply")

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from visemeface.face.mesh import MESH_RIG_DEFAULTS
 from visemeface.face.multipie import edge_graph, lid_regions, lip_regions, mouth_interior, named_landmarks
 from visemeface.resources import data_path
 
@@ -46,14 +47,11 @@ COLOURS = {"skin": (0.80, 0.60, 0.50), "lip": (0.70, 0.40, 0.40), "sclera": (0.9
 #: The jaw opens in mouth widths as the default face's does (its lower lip's centre drops 0.421 W at jaw 1,
 #: where the visemes' openings were fitted): ICT's jaw joints lie further behind the lips, so the default
 #: face's 9.5 degrees dropped its lip only 0.17 W.
-#: The mouth corners move as one piece within 0.2 W (1 cm of a 5 cm mouth: the modiolus, the knot of the cheek and
-#: lip muscles about 1 cm across at each corner, Standring 2016), fully within 0.3 of that: the scan's lip rows
-#: converge on each corner 0.1-0.2 mm apart, and without the blend 64 triangles beside the corners turned over on
-#: /aa/ (the upper lip's corners hooked down) and 2,426 over the visemes and the emotions blended with /aa/ and /uw/.
+#: The mouth corners move as one piece (:data:`~visemeface.face.mesh.MESH_RIG_DEFAULTS`): the scan's lip rows
+#: converge on each corner 0.1-0.2 mm apart, and without it 64 triangles beside the corners turned over on /aa/
+#: (the upper lip's corners hooked down) and 2,426 over the visemes and the emotions blended with /aa/ and /uw/.
 RIG_DEFAULTS = {"jaw": {"neck_fade_deg": 30.0, "max_drop": 0.421}, "defaults": {"attachment_fade": 0.6},
-                "modiolus": {"radius": 0.2, "core": 0.3,
-                             "exclude": ["eyes", "eyeballs", "upper_teeth", "lower_teeth", "upper_gum", "lower_gum",
-                                         "tongue"]}}
+                **MESH_RIG_DEFAULTS}
 
 
 @functools.lru_cache(maxsize=1)

@@ -71,6 +71,18 @@ def split_quads(quads: np.ndarray) -> np.ndarray:
     return tris
 
 
+#: The rig defaults of a face read from a mesh file (and of the ICT head): the mouth corners move as one piece
+#: within 0.2 mouth widths, fully within 0.3 of that (the rig file's ``[modiolus]``,
+#: :func:`visemeface.muscles.functions.modiolus_blend`). At each corner the muscles of cheek and lips insert into
+#: the modiolus, a knot about 1 cm across (Standring 2016): 0.2 W of a 5 cm mouth. A scan's lip rows converge on
+#: each corner a fraction of a millimetre apart, and without it they pass each other and fold (ICT's head: 64
+#: triangles beside the corners turned over on /aa/; its OBJ prepared by ``face --prepare``, a lip stretched 8.2
+#: times, 2.8 with it). The procedural face goes without (docs/notes/mouth_corners.md).
+MESH_RIG_DEFAULTS = {"modiolus": {"radius": 0.2, "core": 0.3,
+                                  "exclude": ["eyes", "eyeballs", "upper_teeth", "lower_teeth", "upper_gum",
+                                              "lower_gum", "tongue"]}}
+
+
 @dataclass
 class FaceMesh:
     """A face surface with named vertex regions and landmarks.
@@ -215,6 +227,7 @@ class FaceMesh:
             "regions": {k: v.tolist() for k, v in self.regions.items()},
             "quads": self.quads.tolist(),
             "n_vertices": self.n_vertices,
+            "rig_defaults": self.rig_defaults,
         }
 
     def to_trimesh(self):
@@ -327,8 +340,9 @@ def _read_surface(path: Path):
     return vertices, np.asarray(loaded.faces, dtype=np.int64), colours
 
 
-def _read_sidecar(path: Path, vertices: np.ndarray) -> tuple[dict, dict, np.ndarray | None]:
-    """Parse and validate a landmarks sidecar against ``vertices``."""
+def _read_sidecar(path: Path, vertices: np.ndarray) -> tuple[dict, dict, np.ndarray | None, dict]:
+    """Parse and validate a landmarks sidecar against ``vertices``: landmarks, regions, quads and the rig
+    defaults (a sidecar without them, one written by hand: :data:`MESH_RIG_DEFAULTS`)."""
     if not path.exists():
         raise InputError("landmarks file not found", path)
     try:
@@ -391,7 +405,11 @@ def _read_sidecar(path: Path, vertices: np.ndarray) -> tuple[dict, dict, np.ndar
             raise InputError(f"'quads': vertex index out of range (mesh has {n} vertices)", path)
     if "n_vertices" in data and data["n_vertices"] != n:
         raise InputError(f"written for a mesh of {data['n_vertices']} vertices, the mesh has {n}", path)
-    return landmarks, regions, quads
+    rig = data.get("rig_defaults", MESH_RIG_DEFAULTS)
+    if not isinstance(rig, dict) or not all(isinstance(v, dict) for v in rig.values()):
+        raise InputError("'rig_defaults' must map rig-file tables to their values, e.g. {\"modiolus\": {...}}",
+                         path)
+    return landmarks, regions, quads, rig
 
 
 def load_face(path: str | Path, landmarks_path: str | Path | None = None) -> FaceMesh:
@@ -423,7 +441,7 @@ def load_face(path: str | Path, landmarks_path: str | Path | None = None) -> Fac
     if landmarks_path is None and not side.exists():
         raise InputError(f"landmarks file not found (expected {side.name} beside the mesh; "
                          "give one with --landmarks)", side)
-    landmarks, regions, quads = _read_sidecar(side, vertices)
+    landmarks, regions, quads, rig = _read_sidecar(side, vertices)
     tris = faces
     if quads is not None and len(quads):
         split = split_quads(quads)
@@ -433,7 +451,8 @@ def load_face(path: str | Path, landmarks_path: str | Path | None = None) -> Fac
             quads = None
     if quads is None:
         quads = np.zeros((0, 4), np.int64)
-    return FaceMesh(vertices, quads, tris, regions, landmarks, colours, landmarks_file=str(side))
+    return FaceMesh(vertices, quads, tris, regions, landmarks, colours, landmarks_file=str(side),
+                    rig_defaults=rig)
 
 
 def _canon(tris: np.ndarray) -> np.ndarray:

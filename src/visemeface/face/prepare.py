@@ -262,7 +262,7 @@ def label(V: np.ndarray, quads: np.ndarray, tris: np.ndarray, lm68: np.ndarray, 
 def prepare(path, indices=None, say=print):
     """The face of the mesh at ``path`` (metres) and its 68 Multi-PIE vertices; ``indices``: a
     ``--landmark-indices`` file (else they are found in the render). Prints what it found through ``say``."""
-    from visemeface.face.mesh import FaceMesh
+    from visemeface.face.mesh import MESH_RIG_DEFAULTS, FaceMesh
     from visemeface.retarget.rigs import _units
 
     V, quads, tris, colours = read_head(path)
@@ -284,7 +284,8 @@ def prepare(path, indices=None, say=print):
         + ("" if scale == 1.0 else f"; scaled by {scale:g} to metres"))
     V = V * scale
     regions, landmarks = label(V, quads, tris, lm68, path, silhouette=indices is None)
-    face = FaceMesh(V, quads, tris, regions, landmarks, colours)       # the mesh's own colours, if it has them
+    face = FaceMesh(V, quads, tris, regions, landmarks, colours,         # the mesh's own colours, if it has them
+                    rig_defaults=MESH_RIG_DEFAULTS)
     say("regions: " + ", ".join(f"{k} {len(v)}" for k, v in face.regions.items() if k != "eyes"))
     return face, lm68
 

@@ -313,14 +313,14 @@ def _ict_topology_face(vertices: np.ndarray, path) -> tuple[object, float]:
 def _with_landmarks(vertices: np.ndarray, triangles: np.ndarray, sidecar: Path, path) -> tuple[object, float]:
     from visemeface.face.mesh import FaceMesh, _read_sidecar
 
-    landmarks, regions, quads = _read_sidecar(sidecar, vertices)
+    landmarks, regions, quads, rig = _read_sidecar(sidecar, vertices)
     for need in ("mouth_corner_left", "mouth_corner_right"):
         if need not in landmarks:
             raise InputError(f"the landmarks file has no {need!r}", sidecar)
     scale = _units(vertices, landmarks["mouth_corner_left"], landmarks["mouth_corner_right"], sidecar)
     V = vertices * scale
     return FaceMesh(V, np.zeros((0, 4), np.int64), triangles, regions, landmarks,
-                    landmarks_file=str(sidecar)), scale
+                    landmarks_file=str(sidecar), rig_defaults=rig), scale
 
 
 def load_client_rig(path) -> ClientRig:
