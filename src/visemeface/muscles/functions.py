@@ -266,9 +266,9 @@ def modiolus_share(points: np.ndarray, corner, radius: float, core: float = 0.3)
     corner ``corner`` (a point), falling as a smoothstep to 0 at ``radius`` (metres).
 
     At each corner the muscles of the cheek and lips (zygomatic major, risorius, the depressor and
-    levator anguli oris, buccinator, orbicularis oris) insert into one fibromuscular knot, the modiolus,
-    about 1 cm across and 1 cm lateral to the corner, that moves as a unit (Standring 2016, *Gray's
-    Anatomy*): the skin of the upper and the lower lip converges on it and goes with it. A rig field
+    levator anguli oris, buccinator, orbicularis oris) insert into one fibromuscular knot beside the corner,
+    the modiolus, about 1 cm across, that moves as a unit (Standring 2016, *Gray's Anatomy*): the skin of
+    the upper and the lower lip converges on it and goes with it. A rig field
     blended toward the corner's own over this share, :math:`(1-s)\,f + s\,\bar f`, moves the corner as
     one piece, so the lips' rows that converge there (a fraction of a millimetre apart on a dense scan)
     cannot pass each other and fold.
@@ -286,6 +286,8 @@ def modiolus_blend(points: np.ndarray, bases: np.ndarray, jaw_weight: np.ndarray
         s = modiolus_share(points, corner, radius, core)
         s[held] = 0.0
         inner = s >= 1.0
+        if not inner.any():             # the corner itself held (no skin there to blend)
+            continue
         bases = bases * (1.0 - s)[None, :, None] + s[None, :, None] * bases[:, inner].mean(axis=1)[:, None, :]
         jaw_weight = jaw_weight * (1.0 - s) + s * jaw_weight[inner].mean()
     return bases, jaw_weight
