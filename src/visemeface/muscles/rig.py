@@ -260,7 +260,7 @@ class MuscleRig:
         frame = mouth_frame(face)
         reader = _RigFileReader(path, face, frame)
         muscles = muscles_from(reader)
-        fade = {**getattr(face, "rig_defaults", {}).get("defaults", {}), **reader.data.get("defaults", {})}
+        fade = reader.table("defaults")
         for m in muscles if "attachment_fade" in fade else ():
             m.params = {**m.params, "attachment_fade": float(fade["attachment_fade"])} if m.kind == "linear" else m.params
         t = reader.data.get("trim", {})
@@ -276,7 +276,7 @@ class MuscleRig:
         j = reader.data.get("jaw")
         if not isinstance(j, Mapping):
             raise reader.error("jaw", "jaw", "missing [jaw] table")
-        j = {**getattr(face, "rig_defaults", {}).get("jaw", {}), **j}
+        j = reader.table("jaw")
         joints = j.get("joints", ["jaw_joint_left", "jaw_joint_right"])
         if not (isinstance(joints, list) and len(joints) == 2 and all(isinstance(x, str) for x in joints)):
             raise reader.error("jaw", "joints", f"expected two landmark names, got {joints!r}")

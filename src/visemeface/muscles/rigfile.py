@@ -66,14 +66,18 @@ class _RigFileReader:
             return tuple(value)
         raise AssertionError(kind)
 
-    def modiolus(self) -> dict | None:
-        """The optional ``[modiolus]`` table (``radius`` in W, ``core``, ``exclude``) over the face's own
-        (:attr:`~visemeface.face.mesh.FaceMesh.rig_defaults`); None without either (the corners are not
-        blended)."""
-        t = self.data.get("modiolus")
+    def table(self, name: str) -> dict:
+        """The rig file's table ``name`` over the face's own values for it
+        (:attr:`~visemeface.face.mesh.FaceMesh.rig_defaults`: the file's win); {} without either."""
+        t = self.data.get(name)
         if t is not None and not isinstance(t, Mapping):
-            raise self.error("modiolus", "modiolus", "expected a table")
-        t = {**getattr(self.face, "rig_defaults", {}).get("modiolus", {}), **(t or {})}
+            raise self.error(name, name, "expected a table")
+        return {**getattr(self.face, "rig_defaults", {}).get(name, {}), **(t or {})}
+
+    def modiolus(self) -> dict | None:
+        """The optional ``[modiolus]`` table (``radius`` in W, ``core``, ``exclude``) over the face's own;
+        None without either (the corners are not blended)."""
+        t = self.table("modiolus")
         if not t:
             return None
         out = {"radius": self.get(t, "modiolus", "radius", float), "core": self.get(t, "modiolus", "core", float),
