@@ -53,6 +53,7 @@ def main(argv=None) -> None:
     import moderngl
 
     from visemeface.face.procedural import default_face
+    from visemeface.render.culling import draw_sides
     from visemeface.render.renderer import Renderer
 
     face = default_face()
@@ -85,7 +86,7 @@ def main(argv=None) -> None:
                     for _ in range(n):
                         r.fbo_ms.use()
                         r.ctx.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
-                        r.vao.render(moderngl.TRIANGLES)
+                        draw_sides(r.ctx, r.vao, r._split[0], r._split[2], front=r.vao_front)  # as render() does
                         r.ctx.copy_framebuffer(r.fbo, r.fbo_ms)
                     r.ctx.finish()
                     draw = (time.perf_counter() - t) / n

@@ -6,8 +6,10 @@ an index buffer. Each frame recomputes smooth vertex normals from the posed
 positions (:class:`visemeface.face.normals.NormalAccumulator`), draws into a
 multisampled framebuffer, resolves it and reads RGB back. Given the vertices
 a caller's frames leave at rest (``still``), a renderer without MSAA leaves out
-the still triangles no pixel shows (:mod:`visemeface.render.culling`): the same
-image, in a quarter less time on the ICT head.
+the still triangles no pixel shows, and every renderer draws closed, outward-facing
+surfaces (teeth, eyeballs, a scanned head's skin) one-sided
+(:mod:`visemeface.render.culling`): the same image, in about half the time on
+the ICT head.
 
 Camera
 ------
@@ -22,8 +24,8 @@ W/2`, :math:`v = (1 - c_y/c_w) H/2` (row 0 at the top).
 Shading
 -------
 Two directional lights and ambient, Lambert diffuse plus a weak Blinn–Phong
-highlight, both sides lit (back faces use the flipped normal), on a dark
-background; the colours come from :meth:`FaceMesh.vertex_colors`, so the
+highlight (:mod:`visemeface.render.shaders`), both sides lit where a back face may
+show (it uses the flipped normal), on a dark background; the colours come from :meth:`FaceMesh.vertex_colors`, so the
 mouth cavity renders dark, and skin the pose compresses shades darker, as its
 folds would (:mod:`visemeface.render.folds`; a face at rest is unchanged).
 """
@@ -37,59 +39,14 @@ import numpy as np
 
 from visemeface.errors import InputError, RenderUnavailable
 from visemeface.face.mesh import FaceMesh
+from visemeface.render.culling import draw_sides, one_sided, outside_frustum
 from visemeface.render.folds import fold_shade
+from visemeface.render.shaders import shader
 
 from visemeface.render import PROJECTIONS, VIEWS  # noqa: E402  (re-exported)
 BACKGROUND = (0.045, 0.047, 0.06)
 FOV_Y_DEG = 18.0
 THREE_QUARTER_DEG = 35.0
-
-# Lighting is evaluated per vertex (Gouraud). At the default face's density a
-# triangle covers a few pixels at 512x512, so the picture matches per-pixel
-# shading, while Mesa's software rasteriser runs a trivial fragment shader
-# about 1.6x faster (benchmarks/render.py). Both sides are lit in the vertex
-# stage; the fragment stage picks the side facing the camera.
-_VERTEX_SHADER = """
-#version 330
-uniform mat4 u_mvp;
-uniform mat4 u_view;
-in vec3 in_pos;
-in vec3 in_normal;
-in vec3 in_color;
-in float in_fold;
-out vec3 v_front;
-out vec3 v_back;
-
-vec3 shade(vec3 n, vec3 view_dir, vec3 color) {
-    // key light from the upper left of the camera, fill from the right, in eye space
-    vec3 key = normalize(vec3(-0.45, 0.55, 0.75));
-    vec3 fill = normalize(vec3(0.6, 0.1, 0.6));
-    float diff = 0.72 * max(dot(n, key), 0.0) + 0.25 * max(dot(n, fill), 0.0);
-    float spec = pow(max(dot(n, normalize(key + view_dir)), 0.0), 28.0);
-    vec3 c = color * (0.30 + diff) + 0.07 * spec * vec3(1.0, 0.97, 0.94) * length(color);
-    return pow(clamp(c, 0.0, 1.0), vec3(1.0 / 1.15));
-}
-
-void main() {
-    gl_Position = u_mvp * vec4(in_pos, 1.0);
-    vec3 n = normalize(mat3(u_view) * in_normal);
-    vec3 view_dir = normalize(-(u_view * vec4(in_pos, 1.0)).xyz);
-    vec3 color = in_color * (1.0 - in_fold);     // compressed skin: a fold's shade (render/folds.py)
-    v_front = shade(n, view_dir, color);
-    v_back = shade(-n, view_dir, color);
-}
-"""
-
-_FRAGMENT_SHADER = """
-#version 330
-in vec3 v_front;
-in vec3 v_back;
-out vec4 f_color;
-void main() {
-    f_color = vec4(gl_FrontFacing ? v_front : v_back, 1.0);
-}
-"""
-
 
 def _look_at(eye, target, up=(0.0, 1.0, 0.0)) -> np.ndarray:
     eye, target, up = (np.asarray(a, dtype=np.float64) for a in (eye, target, up))
@@ -202,6 +159,7 @@ class Renderer:
         self._triangles = np.ascontiguousarray(tris, dtype=np.int32)
         self._normals = face.normal_accumulator()
         self._setup_camera()
+        self._setup_sides()
         self._setup_gl(samples)
         self._setup_culling(still)
 
@@ -306,6 +264,29 @@ class Renderer:
             info["mouth_corners_px"] = corners.tolist()
         return info
 
+    def _setup_sides(self):
+        """The surfaces that may be drawn one-sided (:func:`visemeface.render.culling.one_sided`)."""
+        # The image is drawn upside down (y flipped in clip space, so winding flips too) because
+        # GL's row 0 is the bottom: the read-back is then already top-down, with no flip copy.
+        self._clip = np.diag([1.0, -1.0, 1.0, 1.0]) @ self.mvp
+        self._closed, self._holed = one_sided(self._triangles, self.face.vertices)
+
+    def _order(self, members):
+        """Order the triangles: the closed surfaces', the holed ``members``', then the two-sided rest."""
+        holed = np.zeros(len(self._triangles), bool)
+        for i in members:
+            holed |= self._holed[i][0]
+        rank = np.where(self._closed, 0, np.where(holed, 1, 2))
+        order = np.argsort(rank, kind="stable")
+        self._closed, self._triangles, self._rank = self._closed[order], self._triangles[order], rank[order]
+        self._holed = [(m[order], rim) for m, rim in self._holed]
+        self._split = self._splits(self._rank)
+
+    @staticmethod
+    def _splits(rank) -> tuple[int, int, int]:
+        """(closed, closed + holed, all): where the one-sided triangles end, without and with the holed."""
+        return int((rank == 0).sum()), int((rank <= 1).sum()), len(rank)
+
     # ------------------------------------------------------------ GL
     def _setup_gl(self, samples):
         import moderngl
@@ -314,13 +295,13 @@ class Renderer:
         except Exception as exc:  # no EGL: say so on one line
             raise RenderUnavailable(f"cannot create a headless OpenGL (EGL) context: {exc}") from None
         ctx = self.ctx
-        self.program = ctx.program(vertex_shader=_VERTEX_SHADER, fragment_shader=_FRAGMENT_SHADER)
-        # The image is drawn upside down (y flipped in clip space, so winding flips too) because
-        # GL's row 0 is the bottom: the read-back is then already top-down, with no flip copy.
-        self._clip = np.diag([1.0, -1.0, 1.0, 1.0]) @ self.mvp
-        for name, matrix in (("u_mvp", self._clip), ("u_view", self.view_matrix)):
-            if name in self.program:          # a uniform the shader does not use is optimised away
-                self.program[name].write(matrix.T.astype("f4").tobytes())
+        self.program, self.program_front = (
+            ctx.program(vertex_shader=shader("vertex", two), fragment_shader=shader("fragment", two))
+            for two in (True, False))
+        for program in (self.program, self.program_front):
+            for name, matrix in (("u_mvp", self._clip), ("u_view", self.view_matrix)):
+                if name in program:          # a uniform the shader does not use is optimised away
+                    program[name].write(matrix.T.astype("f4").tobytes())
         n = self.face.n_vertices
         self._vbo_data = np.empty((n, 7), dtype="f4")
         self._lengths = np.empty(n, dtype="f4")
@@ -328,8 +309,6 @@ class Renderer:
         self._normals(self.face.vertices, dtype=np.float32, lengths=self._rest_lengths)
         self.vbo = ctx.buffer(reserve=self._vbo_data.nbytes, dynamic=True)
         self.cbo = ctx.buffer(np.ascontiguousarray(self.face.vertex_colors(), dtype="f4").tobytes())
-        self.ibo = ctx.buffer(self._triangles.tobytes())
-        self.vao = self._vertex_array(self.ibo)
         w, h = self.size
         samples = int(min(max(samples, 0), ctx.max_samples))
         self.samples = samples
@@ -342,31 +321,55 @@ class Renderer:
         else:
             self.fbo_ms = self.fbo
 
-    def _vertex_array(self, ibo):
-        """The face's vertex array drawing the triangles of index buffer ``ibo``."""
-        return self.ctx.vertex_array(self.program, [(self.vbo, "3f 3f 1f", "in_pos", "in_normal", "in_fold"),
-                                                    (self.cbo, "3f", "in_color")],
-                                     index_buffer=ibo, index_element_size=4)
+    def _vertex_array(self, ibo, program=None):
+        """The face's vertex array drawing the triangles of index buffer ``ibo`` (two-sided, or with ``program``)."""
+        return self.ctx.vertex_array(program or self.program,
+                                     [(self.vbo, "3f 3f 1f", "in_pos", "in_normal", "in_fold"),
+                                      (self.cbo, "3f", "in_color")], index_buffer=ibo, index_element_size=4)
 
     def _setup_culling(self, still):
-        self._still = self.vao_shown = None
-        self.n_shown = len(self._triangles)     # the triangles a frame with its still vertices at rest draws
-        if still is None or self.samples > 1:
-            return
+        """The index buffers: every triangle, and (given ``still``, no MSAA) those a frame with its still
+        vertices at rest draws. A holed surface is one-sided in a frame whose hole rims are out of view, or
+        whose still vertices are at rest if its rims are still and the cap over its holes shows at no pixel
+        among the still triangles at rest (any ray that meets the surface then meets it as a closed one)."""
         from visemeface.render.culling import shown_triangles
-        still = np.asarray(still, dtype=bool)
-        if still.shape != (self.face.n_vertices,):
-            raise InputError(f"still must be ({self.face.n_vertices},) booleans, got shape {still.shape}")
-        rest = self.face.vertices.astype(np.float32)
+        rest = self.face.vertices
+        out = [outside_frustum(self._clip, rest[np.unique(rim)]) for _, rim in self._holed]
+        use_still = still is not None and self.samples <= 1
+        if use_still:
+            still = np.asarray(still, dtype=bool)
+            if still.shape != (self.face.n_vertices,):
+                raise InputError(f"still must be ({self.face.n_vertices},) booleans, got shape {still.shape}")
+        capped = [i for i, (_, rim) in enumerate(self._holed) if use_still and not out[i] and still[rim].all()]
         with self.ctx:
-            keep = shown_triangles(self.ctx, self._clip, rest, self._triangles, still, self.size)
-            if keep.all():
+            while True:
+                members = [i for i in range(len(self._holed)) if out[i] or i in capped]
+                self._order(members)
+                if not use_still:
+                    break
+                keep, hidden = shown_triangles(self.ctx, self._clip, rest.astype(np.float32), self._triangles,
+                                               still, self.size, one_sided=self._split[1],
+                                               caps=[self._holed[i][1] for i in capped])
+                if hidden.all():
+                    break
+                capped = [i for i, h in zip(capped, hidden) if h]
+            self._rims = [np.unique(self._holed[i][1]) for i in members]
+            self._capped = [i in capped for i in members]
+            self.ibo = self.ctx.buffer(self._triangles.tobytes())
+            self.vao, self.vao_front = self._vertex_array(self.ibo), self._vertex_array(self.ibo, self.program_front)
+            self._still = self.vao_shown = None
+            self.n_shown, self._split_shown = len(self._triangles), self._split
+            if not use_still:
                 return
-            self.ibo_shown = self.ctx.buffer(np.ascontiguousarray(self._triangles[keep]).tobytes())
-            self.vao_shown = self._vertex_array(self.ibo_shown)
+            self.vao_shown, self.vao_shown_front = self.vao, self.vao_front
+            if not keep.all():
+                self.ibo_shown = self.ctx.buffer(np.ascontiguousarray(self._triangles[keep]).tobytes())
+                self.vao_shown = self._vertex_array(self.ibo_shown)
+                self.vao_shown_front = self._vertex_array(self.ibo_shown, self.program_front)
         self.n_shown = int(keep.sum())
+        self._split_shown = self._splits(self._rank[keep])
         self._still = np.flatnonzero(still)
-        self._still_rest = rest[self._still]
+        self._still_rest = rest.astype(np.float32)[self._still]
 
     def render(self, vertices: np.ndarray | None = None) -> np.ndarray:
         """Render one frame; returns a new uint8 (H, W, 3) RGB array, row 0 at the top.
@@ -387,19 +390,21 @@ class Renderer:
         self._vbo_data[:, :3] = v
         self._vbo_data[:, 3:6] = self._normals(v, dtype=np.float32, lengths=self._lengths)
         self._vbo_data[:, 6] = fold_shade(self._lengths, self._rest_lengths)
-        vao = self.vao
-        if self._still is not None and np.array_equal(self._vbo_data[self._still, :3], self._still_rest):
-            vao = self.vao_shown        # the still vertices at rest: the still triangles hidden at rest stay so
+        at_rest = self._still is not None and np.array_equal(self._vbo_data[self._still, :3], self._still_rest)
+        holed = all((at_rest and c) or outside_frustum(self._clip, v[rim]) for rim, c in zip(self._rims, self._capped))
+        # the still vertices at rest: the still triangles hidden at rest stay so
+        vaos, split = (((self.vao_shown_front, self.vao_shown), self._split_shown) if at_rest and holed
+                       else ((self.vao_front, self.vao), self._split))
+        cut = split[1] if holed else split[0]           # the one-sided triangles come first
         ctx = self.ctx
         w, h = self.size
         with ctx:   # make this renderer's context current (several renderers may coexist)
             self.vbo.write(self._vbo_data)
             self.fbo_ms.use()
             ctx.enable(moderngl.DEPTH_TEST)
-            ctx.disable(moderngl.CULL_FACE)
             ctx.front_face = "cw"   # the y flip above mirrors the winding
             ctx.clear(*BACKGROUND, 1.0, depth=1.0)
-            vao.render(moderngl.TRIANGLES)
+            draw_sides(ctx, vaos[1], cut, split[2], front=vaos[0])
             if self.fbo_ms is not self.fbo:
                 ctx.copy_framebuffer(self.fbo, self.fbo_ms)
             image = np.empty((h, w, 3), dtype=np.uint8)
