@@ -23,3 +23,18 @@ def cosine_step(x):
     """
     x = np.clip(np.asarray(x, dtype=np.float64), 0.0, 1.0)
     return (1.0 - np.cos(np.pi * x)) / 2.0
+
+
+def sphere_fit(points) -> tuple[np.ndarray, float]:
+    """The least-squares sphere through ``points`` (n, 3): (centre, radius).
+
+    >>> c, r = sphere_fit([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0, -1]])
+    >>> c.round(12).tolist(), round(r, 12)
+    ([0.0, 0.0, 0.0], 1.0)
+    """
+    P = np.asarray(points, dtype=np.float64)
+    A = np.column_stack([2.0 * P, np.ones(len(P))])
+    sol, *_ = np.linalg.lstsq(A, (P * P).sum(axis=1), rcond=None)
+    centre = sol[:3]
+    return centre, float(np.sqrt(sol[3] + centre @ centre))
+

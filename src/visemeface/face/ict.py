@@ -30,6 +30,7 @@ import numpy as np
 
 from visemeface.face.mesh import MESH_RIG_DEFAULTS
 from visemeface.face.multipie import edge_graph, lid_regions, lip_regions, mouth_interior, named_landmarks
+from visemeface.numeric import sphere_fit
 from visemeface.resources import data_path
 
 #: ICT's colours (linear 0..1): skin, lips, sclera, iris, teeth, gums and tongue, the mouth socket.
@@ -50,8 +51,10 @@ COLOURS = {"skin": (0.80, 0.60, 0.50), "lip": (0.70, 0.40, 0.40), "sclera": (0.9
 #: The mouth corners move as one piece (:data:`~visemeface.face.mesh.MESH_RIG_DEFAULTS`): the scan's lip rows
 #: converge on each corner 0.1-0.2 mm apart, and without it 64 triangles beside the corners turned over on /aa/
 #: (the upper lip's corners hooked down) and 2,426 over the visemes and the emotions blended with /aa/ and /uw/.
+#: The eyeballs are spheres (15.8 mm): each turns whole and exactly about its own centre (``[gaze] rigid``),
+#: where the default face's flattened caps turn only their front, linearised, about a point 9.5 mm behind it.
 RIG_DEFAULTS = {"jaw": {"neck_fade_deg": 30.0, "max_drop": 0.421}, "defaults": {"attachment_fade": 0.6},
-                **MESH_RIG_DEFAULTS}
+                "gaze": {"rigid": True}, **MESH_RIG_DEFAULTS}
 
 
 @functools.lru_cache(maxsize=1)
@@ -109,21 +112,13 @@ _EDGE = 0.0008
 _OUTER_SHELL = 770
 
 
-def _sphere_fit(P: np.ndarray) -> tuple[np.ndarray, float]:
-    """The least-squares sphere through points ``P``: (centre, radius)."""
-    A = np.column_stack([2.0 * P, np.ones(len(P))])
-    sol, *_ = np.linalg.lstsq(A, (P * P).sum(axis=1), rcond=None)
-    centre = sol[:3]
-    return centre, float(np.sqrt(sol[3] + centre @ centre))
-
-
 def _eye_axis_distance(P: np.ndarray, shell: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Each point's distance from the eye's optical axis and whether it lies in front of the eye's centre.
 
     The centre is the sphere fitted to the outer shell; the axis runs from it through the cornea's apex (the
     shell's farthest point from the centre: the cornea bulges about 1 mm past the sclera's sphere). Painted by
     this distance, the iris and pupil are round and centred under the cornea, as they are in a real eye."""
-    centre, _ = _sphere_fit(shell)
+    centre, _ = sphere_fit(shell)
     d = shell - centre
     axis = d[np.argmax(np.einsum("ij,ij->i", d, d))]
     axis = axis / np.linalg.norm(axis)

@@ -399,14 +399,30 @@ def local_displacement(points: np.ndarray, centre, radii, direction, mask: np.nd
     return (w * np.asarray(mask, dtype=float))[:, None] * d
 
 
+def turn_weight(points: np.ndarray, line, mask: np.ndarray, radius: float | None = None, view=(0.0, 0.0, 1.0),
+                lids: np.ndarray | None = None, lid_radius: float | None = None) -> np.ndarray:
+    """Each vertex's share (N,) of a turn's angle (:func:`turn_displacement`): 1 on ``mask`` (within ``radius``
+    of the line through ``line`` along ``view``, when given), the lids' shares fading toward the eye's corners."""
+    r = np.asarray(points, dtype=float) - np.asarray(line, dtype=float)
+    v = _unit(view)
+    d = np.linalg.norm(r - np.outer(r @ v, v), axis=1)
+    w = np.asarray(mask, dtype=float)
+    if radius is not None:
+        w = w * smoothstep(radius, 0.7 * radius, d)
+    if lids is not None and lid_radius:
+        w = w + np.asarray(lids, dtype=float) * smoothstep(lid_radius, 0.5 * lid_radius, d)
+    return w
+
+
 def turn_displacement(points: np.ndarray, centre, axis, angle: float, mask: np.ndarray,
                       radius: float | None = None, view=(0.0, 0.0, 1.0), lids: np.ndarray | None = None,
-                      lid_radius: float | None = None) -> np.ndarray:
+                      lid_radius: float | None = None, line=None) -> np.ndarray:
     r"""A small rotation (N, 3) of the vertices in ``mask`` about ``axis`` through ``centre``, linearised:
 
     .. math:: \Delta\mathbf p = w\,\theta\,\mathbf k \times (\mathbf p - \mathbf c),
 
-    exact to first order in :math:`\theta`. With ``radius`` only the part within
+    exact to first order in :math:`\theta` (a rig turning an eyeball rigidly adds the rotation's higher
+    orders, :func:`rotation_terms`). With ``radius`` only the part within
     ``radius`` of the line through ``centre`` along ``view`` turns (:math:`w` falls
     from 1 at 0.7 ``radius`` to 0 at ``radius``): the iris slides over the sclera,
     and the eyeball's wide sides stay under the lids.
@@ -415,16 +431,35 @@ def turn_displacement(points: np.ndarray, centre, axis, angle: float, mask: np.n
     their share, about the same centre, so they slide over the globe with it, fading from full at half
     ``lid_radius`` from that line to none at ``lid_radius`` (the eye's corners, held by the canthal tendons,
     barely move): the upper lid follows vertical gaze about one to one (Becker & Fuchs 1988), so looking up
-    or down neither bares the white above the iris nor drives the lid through it.
+    or down neither bares the white above the iris nor drives the lid through it. The forward line runs
+    through ``line`` (default ``centre``): a point on the eye's axis in front of the centre.
     """
-    points = np.asarray(points, dtype=float)
-    k = _unit(axis)
-    r = points - np.asarray(centre, dtype=float)
-    v = _unit(view)
-    d = np.linalg.norm(r - np.outer(r @ v, v), axis=1)
-    w = np.asarray(mask, dtype=float)
-    if radius is not None:
-        w = w * smoothstep(radius, 0.7 * radius, d)
-    if lids is not None and lid_radius:
-        w = w + np.asarray(lids, dtype=float) * smoothstep(lid_radius, 0.5 * lid_radius, d)
-    return float(angle) * np.cross(k, r) * w[:, None]
+    w = turn_weight(points, centre if line is None else line, mask, radius, view, lids, lid_radius)
+    r = np.asarray(points, dtype=float) - np.asarray(centre, dtype=float)
+    return float(angle) * np.cross(_unit(axis), r) * w[:, None]
+
+
+def rotation_terms(perp: np.ndarray, cross: np.ndarray, w: np.ndarray, degrees) -> np.ndarray:
+    r"""The Taylor terms :math:`C_j` (len(degrees), N, 3) of a rotation by :math:`\theta w_i` about an axis:
+
+    .. math:: (\cos\theta w_i - 1)\,\mathbf r_\perp + \sin\theta w_i\,(\mathbf k \times \mathbf r)
+              = \sum_{j \ge 1} \theta^j C_j, \quad
+              C_j = \frac{(-1)^{\lfloor j/2 \rfloor} w_i^j}{j!}\,
+              \begin{cases} \mathbf k \times \mathbf r & j \text{ odd} \\ \mathbf r_\perp & j \text{ even}\end{cases}
+
+    (``perp``: each point's offset from the axis, ``cross``: :math:`\mathbf k \times \mathbf r`, both (N, 3)).
+    """
+    from math import factorial
+    w = np.asarray(w, dtype=float)
+    return np.array([((-1.0) ** (j // 2) / factorial(j)) * (w ** j)[:, None] * (cross if j % 2 else perp)
+                     for j in degrees]).reshape(len(degrees), *np.shape(perp))
+
+
+def series_degree(theta_max: float, radius: float, tolerance: float = 1e-10) -> int:
+    """The degree at which a rotation's Taylor series (:func:`rotation_terms`) is cut: its next term is below
+    ``tolerance`` (m) for every angle up to ``theta_max`` at ``radius`` (m) from the axis."""
+    from math import factorial
+    degree = 1
+    while theta_max ** (degree + 1) / factorial(degree + 1) * radius > tolerance and degree < 40:
+        degree += 1
+    return degree

@@ -47,12 +47,14 @@ class Muscle:
     #                                        ``inner`` is then the radius of the part that turns (m)
     lids: np.ndarray | None = None         # "turn": (N,) each lid vertex's share of the turn (0: none)
     lid_radius: float | None = None        # "turn": how far from the forward line the lids follow (m)
+    rigid: bool = False                    # "turn": the whole region turns, exactly (muscles/eyeballs.py)
+    line: np.ndarray | None = None         # "turn": a point of the forward line (default ``centre``)
 
     def field(self, points: np.ndarray, frame: MouthFrame, direction: np.ndarray | None = None) -> np.ndarray:
         """Untrimmed displacement (N, 3) at activation 1 (a local function's ``direction`` may be replaced)."""
         if self.kind == "turn":
             return mf.turn_displacement(points, self.centre, self.axis, self.k, self.mask, self.inner,
-                                        frame.axes[2], self.lids, self.lid_radius)
+                                        frame.axes[2], self.lids, self.lid_radius, self.line)
         if self.kind == "local":
             if self.mask is None or not self.mask.any():
                 return np.zeros_like(np.asarray(points, dtype=float))

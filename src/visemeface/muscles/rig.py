@@ -44,6 +44,7 @@ import numpy as np
 
 from visemeface.errors import InputError, close_matches
 from visemeface.muscles import functions as mf
+from visemeface.muscles.eyeballs import eyeball_coefficients, eyeball_turns
 from visemeface.muscles.posing import MovingProduct
 from visemeface.resources import data_path
 from visemeface.muscles.muscle import Muscle
@@ -168,35 +169,28 @@ class MuscleRig:
         self._build_fast_path()
 
     def _build_fast_path(self, tolerance: float = 1e-10):
-        r"""One matrix for the whole pose: muscle bases plus a Taylor series of the jaw.
+        r"""One matrix for the whole pose: muscle bases plus Taylor series of the rotations.
 
         With :math:`\theta_i = \theta w_i` the jaw term is
         :math:`(\cos\theta_i - 1)\,\mathbf r_\perp + \sin\theta_i\,(\mathbf k \times \mathbf r)
-        = \sum_{j \ge 1} \theta^j\, C_j` with
-        :math:`C_j = w_i^j\,(-1)^{\lfloor j/2 \rfloor} / j!` times
-        :math:`\mathbf r_\perp` (even j) or :math:`\mathbf k \times \mathbf r` (odd j).
-        The series is cut at the degree whose next term is below ``tolerance``
-        metres for every angle in the jaw's range, so a pose is one product
-        :math:`[\mathbf a, \theta, \theta^2, \dots] \cdot B` (exactness is
-        checked against :meth:`jaw_displacement` in the tests).
+        = \sum_{j \ge 1} \theta^j C_j` (:func:`~visemeface.muscles.functions.rotation_terms`), cut at the
+        degree whose next term is below ``tolerance`` metres for every angle in the jaw's range. The rigid
+        turns of one eyeball (``[gaze] rigid``) add the rows of :mod:`~visemeface.muscles.eyeballs`. So a pose is one
+        product :math:`\mathbf c(\mathbf a) \cdot B` (exactness is checked against
+        :meth:`jaw_displacement` and the rotations themselves in the tests).
         """
-        from math import factorial
         n = len(self.rest)
         lo, hi = self.jaw["range"]
         theta_max = max(abs(lo), abs(hi)) * self.max_jaw_angle * (self._jaw_w.max() if len(self._jaw_w) else 0.0)
         radius = float(np.linalg.norm(np.hstack([self._jaw_perp, self._jaw_cross]), axis=1).max()) \
             if len(self._jaw_w) else 0.0
-        degree = 1
-        while theta_max ** (degree + 1) / factorial(degree + 1) * radius > tolerance and degree < 40:
-            degree += 1
+        degree = mf.series_degree(theta_max, radius, tolerance)
         self._jaw_degree = degree
-        rows = [self.bases.reshape(len(self.muscles), 3 * n)]
-        for j in range(1, degree + 1):
-            c = np.zeros((n, 3))
-            sign = (-1.0) ** (j // 2)
-            vec = self._jaw_cross if j % 2 else self._jaw_perp
-            c[self._jaw_idx] = (sign / factorial(j)) * (self._jaw_w ** j)[:, None] * vec
-            rows.append(c.reshape(1, 3 * n))
+        c = np.zeros((degree, n, 3))
+        c[:, self._jaw_idx] = mf.rotation_terms(self._jaw_perp, self._jaw_cross, self._jaw_w, range(1, degree + 1))
+        rows = [self.bases.reshape(len(self.muscles), 3 * n), c.reshape(degree, 3 * n)]
+        self._eyes = eyeball_turns(self.rest, self.muscles, self.frame.axes[2])
+        rows += [eye.rows.reshape(len(eye.rows), 3 * n) for eye in self._eyes]
         # float32 halves the memory traffic of the product (the pose's cost); displacements are
         # millimetres, so the rounding is below a nanometre. Positions stay float64.
         self._matrix = np.ascontiguousarray(np.vstack(rows), dtype=np.float32)
@@ -210,9 +204,12 @@ class MuscleRig:
         return self._moving.still(c)
 
     def _coefficients(self, a: np.ndarray) -> np.ndarray:
-        """``[a_muscles, theta, theta^2, ...]`` for activations (..., M+1)."""
+        """``[a_muscles, theta, theta^2, ..., then each eyeball's pair terms]`` for activations (..., M+1)
+        (an eyeball's rigid turns scaled as :func:`~visemeface.muscles.eyeballs.eyeball_coefficients` says)."""
+        a = np.asarray(a, dtype=np.float64)
         theta = a[..., -1:] * self.max_jaw_angle
-        return np.concatenate([a[..., :-1], theta ** self._powers], axis=-1).astype(np.float32)
+        muscles, pairs = eyeball_coefficients(a[..., :-1], self._eyes)
+        return np.concatenate([muscles, theta ** self._powers, *pairs], axis=-1).astype(np.float32)
 
     # ---------------------------------------------------------------- build
     @staticmethod

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from visemeface.errors import InputError, close_matches
+from visemeface.numeric import sphere_fit
 from visemeface.textfile import parse_toml, read_text
 
 #: Region names of docs/conventions.md (a rig file may name them even if a mesh lacks some).
@@ -73,6 +74,14 @@ class _RigFileReader:
         if t is not None and not isinstance(t, Mapping):
             raise self.error(name, name, "expected a table")
         return {**getattr(self.face, "rig_defaults", {}).get(name, {}), **(t or {})}
+
+    def gaze_rigid(self) -> bool:
+        """The optional ``[gaze]`` table's ``rigid`` (default false): the "turn" functions turn their whole
+        regions exactly, each about the centre of the sphere through its vertices (spherical eyeballs)."""
+        rigid = self.table("gaze").get("rigid", False)
+        if not isinstance(rigid, bool):
+            raise self.error("gaze", "rigid", f"expected true or false, got {rigid!r}")
+        return rigid
 
     def modiolus(self) -> dict | None:
         """The optional ``[modiolus]`` table (``radius`` in W, ``core``, ``exclude``) over the face's own;
@@ -314,3 +323,13 @@ def _turn_muscle(reader: _RigFileReader, table: Mapping, base: str, side: str, m
         m.mask = mask & mine
         if m.lids is not None:
             m.lids = m.lids * mine
+    if reader.gaze_rigid() and m.mask.any():
+        # a spherical eyeball turns whole and exactly about its own centre (the sphere through its vertices;
+        # parts inside it, such as ICT's iris shells, left out of the fit); the lids' fade keeps the file's
+        # centre, on the forward line through the pupil
+        fit = m.mask.copy()
+        if "enclosed" in reader.face.regions:
+            fit[reader.face.regions["enclosed"]] = False
+        m.line = m.centre
+        m.centre, _ = sphere_fit(reader.face.vertices[fit if fit.any() else m.mask])
+        m.inner, m.rigid = None, True

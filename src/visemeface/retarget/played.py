@@ -71,7 +71,7 @@ class ReferenceFit:
         m = len(rig.names) - 1
         self.lo, hi = rig.ranges[:m, 0], rig.ranges[:m, 1]
         self.span = hi - self.lo
-        S, J = matrix[:m] * self.span[:, None], matrix[m:]
+        S, J = matrix[:m] * self.span[:, None], matrix[m:m + len(rig._powers)]   # the jaw's series, not the eyes'
         base = self.lo @ matrix[:m]
         self.G = S @ S.T
         self.lam = RIDGE * np.trace(self.G) / m
