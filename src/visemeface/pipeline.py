@@ -87,32 +87,22 @@ class RunStats:
     written: list = field(default_factory=list)
 
 
-def _image(frame, renderer, sinks, stats) -> None:
+def _image(frame, renderer, sinks, stats, model=None) -> None:
     for s in sinks:
         image = s.cached_image(frame.index)
         if image is not None:
             frame.image = image
             stats.reused += 1
             return
-    frame.image = renderer.render(frame.vertices)
+    frame.image = renderer.render(frame.vertices, model)
     stats.rendered += 1
 
 
 def _feed(frame, renderer, sinks, stats, n_vertices: int, head=None) -> None:
-    """Render ``frame`` (all its vertices: the motion's render face; turned by ``head``, (pivot, (F, 3) degrees),
+    """Render ``frame`` (all its vertices: the motion's render face; turned by ``head``, (F, 4, 4) model matrices,
     where given) and write it (the face's vertices, never turned)."""
     if renderer is not None:
-        if head is not None:
-            from visemeface.speech.gestures import rotate_head
-
-            pivot, angles = head
-            posed = frame
-            frame = dataclasses.replace(frame, vertices=rotate_head(frame.vertices,
-                                                                     angles[min(frame.index, len(angles) - 1)], pivot))
-            _image(frame, renderer, sinks, stats)
-            frame = dataclasses.replace(posed, image=frame.image)
-        else:
-            _image(frame, renderer, sinks, stats)
+        _image(frame, renderer, sinks, stats, None if head is None else head[min(frame.index, len(head) - 1)])
     if len(frame.vertices) > n_vertices:
         frame = dataclasses.replace(frame, vertices=frame.vertices[:n_vertices])
     for s in sinks:
@@ -149,27 +139,27 @@ def run(motion: Motion, sinks: list[Sink], render: RenderSettings | None = None,
     done, state = checkpoint.load() if (checkpoint is not None and resume) else (0, None)
     need_image = any(s.needs_image for s in sinks)
     with contextlib.ExitStack() as stack:
-        renderer = None
+        renderer = head = None
         run_info = RunInfo(face=motion.face, fps=motion.fps, n_frames=motion.n_frames, **(info or {}))
-        if need_image:
-            from visemeface.render.renderer import Renderer
-
-            # a turned head moves every vertex: no still ones to cull by
-            still = motion.still_vertices() if run_info.extra.get("head") is None else None
-            renderer = stack.enter_context(Renderer(motion.render_face, size=(render.size, render.size),
-                                                    view=render.view, samples=render.msaa, still=still))
-            run_info.size, run_info.mouth_box = render.size, renderer.mouth_box()
-        head = None
         if run_info.extra.get("head") is not None:
             import numpy as np
 
             from visemeface.motion import digest
-            from visemeface.speech.gestures import head_pivot
+            from visemeface.speech.gestures import head_matrices, head_pivot
 
             angles = np.asarray(run_info.extra["head"], dtype=np.float64)
-            head = (head_pivot(motion.face.vertices), angles)
+            head = head_matrices(angles, head_pivot(motion.face.vertices))
             run_info.extra.setdefault("render_key", f"{render.key()}/head:{digest(angles)[:16]}")
         run_info.extra.setdefault("render_key", render.key())
+        if need_image:
+            from visemeface.render.renderer import Renderer
+
+            # the renderer turns the head (a model matrix per frame); a turned head shows what the still
+            # triangles hid at rest (through the moving lips, between the teeth), so none is culled
+            renderer = stack.enter_context(Renderer(motion.render_face, size=(render.size, render.size),
+                                                    view=render.view, samples=render.msaa,
+                                                    still=None if head is not None else motion.still_vertices()))
+            run_info.size, run_info.mouth_box = render.size, renderer.mouth_box()
         opened = []
         try:
             for s in sinks:

@@ -208,11 +208,11 @@ def test_speak_resume_after_interruption_keeps_frames(short, capsys, monkeypatch
     calls = {"n": 0}
     real = renderer.Renderer.render
 
-    def interrupted(self, vertices=None):
+    def interrupted(self, vertices=None, model=None):
         if calls["n"] == 9:
             raise KeyboardInterrupt
         calls["n"] += 1
-        return real(self, vertices)
+        return real(self, vertices, model)
 
     monkeypatch.setattr(renderer.Renderer, "render", interrupted)
     with warnings.catch_warnings():
@@ -224,9 +224,9 @@ def test_speak_resume_after_interruption_keeps_frames(short, capsys, monkeypatch
     assert len(kept) == 9 and not (short / "fr").exists() and not (short / "short.mp4").exists()
     before = {p.name: (p.stat().st_ino, p.stat().st_mtime_ns, p.read_bytes()) for p in kept}
 
-    def counting(self, vertices=None):
+    def counting(self, vertices=None, model=None):
         calls["n"] += 1
-        return real(self, vertices)
+        return real(self, vertices, model)
 
     monkeypatch.setattr(renderer.Renderer, "render", counting)
     calls["n"] = 0
@@ -255,9 +255,9 @@ def test_speak_resume_from_finished_frames_renders_nothing(short, capsys, monkey
     calls = {"n": 0}
     real = renderer.Renderer.render
 
-    def counting(self, vertices=None):
+    def counting(self, vertices=None, model=None):
         calls["n"] += 1
-        return real(self, vertices)
+        return real(self, vertices, model)
 
     monkeypatch.setattr(renderer.Renderer, "render", counting)
     assert main(["speak", "short.txt", "--size", "32", "--frames", "fr", "--resume", "-o", "v.mp4"]) == 0

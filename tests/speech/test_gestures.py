@@ -7,6 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from visemeface.errors import InputError
 from visemeface.speech.acoustics import Acoustics
 from visemeface.speech.g2p import text_to_utterance
 from visemeface.speech.gestures import (BROW_COLUMNS, accents, add_face_gestures, head_pivot, head_quaternions,
@@ -103,6 +104,32 @@ def test_rotations_turn_the_face_the_documented_ways():
     turned = rotate_head(v, [2.0, 3.0, 1.0], pivot)
     d0 = np.linalg.norm(v - pivot, axis=1)
     np.testing.assert_allclose(np.linalg.norm(turned - pivot, axis=1), d0, rtol=1e-6)   # rigid about the pivot
+
+
+def test_the_renderer_turns_the_head_as_turned_vertices_would_and_culls_no_turned_frame():
+    """A turned head is drawn by the GPU with its model matrix: the picture of the vertices turned on the CPU
+    (to edge rounding), and a renderer that culls still triangles draws a turned frame whole."""
+    from visemeface.muscles.rig import default_rig
+    from visemeface.render.renderer import Renderer
+    from visemeface.speech.gestures import head_matrices
+
+    rig = default_rig()
+    v = np.asarray(rig.pose({"jaw": 0.5, "zygomatic_major_left": 0.6}), np.float32)
+    pivot = head_pivot(rig.face.vertices)
+    angles = np.array([[4.0, -3.0, 2.0]])
+    m = head_matrices(angles, pivot)[0]
+    np.testing.assert_allclose(v @ m[:3, :3].T + m[:3, 3], rotate_head(v, angles[0], pivot), atol=1e-6)
+    with Renderer(rig.face, size=256, samples=0) as plain, \
+            Renderer(rig.face, size=256, samples=0, still=rig.still_vertices()) as culling:
+        turned = plain.render(v, m)
+        cpu = plain.render(rotate_head(v, angles[0], pivot))
+        moved = np.abs(turned.astype(int) - plain.render(v)).max(axis=2) > 8
+        off = np.abs(turned.astype(int) - cpu).max(axis=2) > 8
+        assert moved.sum() > 2000 and off.sum() <= 10, (moved.sum(), off.sum())
+        np.testing.assert_array_equal(culling.render(v, m), turned)
+        np.testing.assert_array_equal(plain.render(v), plain.render(v, np.eye(4)))   # back to the rest view
+        with pytest.raises(InputError, match="model must be a finite"):
+            plain.render(v, np.full((4, 4), np.nan))
 
 
 @pytest.fixture(scope="module")

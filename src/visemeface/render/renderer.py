@@ -161,6 +161,8 @@ class Renderer:
         self._setup_camera()
         self._setup_sides()
         self._setup_gl(samples)
+        self._model = None
+        self._set_model(np.eye(4))
         self._setup_culling(still)
 
     # ------------------------------------------------------------ camera
@@ -298,10 +300,6 @@ class Renderer:
         self.program, self.program_front = (
             ctx.program(vertex_shader=shader("vertex", two), fragment_shader=shader("fragment", two))
             for two in (True, False))
-        for program in (self.program, self.program_front):
-            for name, matrix in (("u_mvp", self._clip), ("u_view", self.view_matrix)):
-                if name in program:          # a uniform the shader does not use is optimised away
-                    program[name].write(matrix.T.astype("f4").tobytes())
         n = self.face.n_vertices
         self._vbo_data = np.empty((n, 7), dtype="f4")
         self._lengths = np.empty(n, dtype="f4")
@@ -371,13 +369,17 @@ class Renderer:
         self._still = np.flatnonzero(still)
         self._still_rest = rest.astype(np.float32)[self._still]
 
-    def render(self, vertices: np.ndarray | None = None) -> np.ndarray:
+    def render(self, vertices: np.ndarray | None = None, model: np.ndarray | None = None) -> np.ndarray:
         """Render one frame; returns a new uint8 (H, W, 3) RGB array, row 0 at the top.
 
         Parameters
         ----------
         vertices : (N, 3) array, optional
             Posed positions of the face's vertices (rest positions if None).
+        model : (4, 4) array, optional
+            A rigid transform the vertices are drawn with (a turned head,
+            :func:`visemeface.speech.gestures.head_matrices`), drawn by the GPU; a frame so turned is drawn
+            whole (its still triangles turn too, so what hides them at rest may not).
         """
         import moderngl
         if self.ctx is None:
@@ -390,8 +392,10 @@ class Renderer:
         self._vbo_data[:, :3] = v
         self._vbo_data[:, 3:6] = self._normals(v, dtype=np.float32, lengths=self._lengths)
         self._vbo_data[:, 6] = fold_shade(self._lengths, self._rest_lengths)
-        at_rest = self._still is not None and np.array_equal(self._vbo_data[self._still, :3], self._still_rest)
-        holed = all((at_rest and c) or outside_frustum(self._clip, v[rim]) for rim, c in zip(self._rims, self._capped))
+        clip = self._set_model(np.eye(4) if model is None else np.asarray(model, dtype=np.float64))
+        turned = model is not None and not np.array_equal(model, np.eye(4))
+        at_rest = self._still is not None and not turned and np.array_equal(self._vbo_data[self._still, :3], self._still_rest)
+        holed = all((at_rest and c) or outside_frustum(clip, v[rim]) for rim, c in zip(self._rims, self._capped))
         # the still vertices at rest: the still triangles hidden at rest stay so
         vaos, split = (((self.vao_shown_front, self.vao_shown), self._split_shown) if at_rest and holed
                        else ((self.vao_front, self.vao), self._split))
@@ -410,6 +414,19 @@ class Renderer:
             image = np.empty((h, w, 3), dtype=np.uint8)
             self.fbo.read_into(image, components=3, alignment=1)
         return image
+
+    def _set_model(self, model: np.ndarray) -> np.ndarray:
+        """Draw with the rigid transform ``model`` (4, 4) from now on; returns its clip matrix."""
+        if model.shape != (4, 4) or not np.isfinite(model).all():
+            raise InputError(f"model must be a finite (4, 4) matrix, got shape {model.shape}")
+        if self._model is None or not np.array_equal(model, self._model):
+            self._model = model.copy()
+            with self.ctx:
+                for program in (self.program, self.program_front):
+                    for name, matrix in (("u_mvp", self._clip @ model), ("u_view", self.view_matrix @ model)):
+                        if name in program:          # a uniform the shader does not use is optimised away
+                            program[name].write(matrix.T.astype("f4").tobytes())
+        return self._clip @ model
 
     def surface_points(self, pixels: np.ndarray) -> np.ndarray:
         """The visible surface's 3-D points (mesh units) under ``pixels`` ``(n, 2)`` (u, v as :meth:`project`

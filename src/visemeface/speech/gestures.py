@@ -295,11 +295,21 @@ def head_pivot(vertices: np.ndarray) -> np.ndarray:
     return np.array([(lo[0] + hi[0]) / 2, lo[1], hi[2] - 0.10])
 
 
+def head_matrices(head_deg: np.ndarray, pivot: np.ndarray) -> np.ndarray:
+    """(F, 4, 4) model matrices turning the head by (F, 3) (yaw, pitch, roll) degrees about ``pivot``
+    (a renderer draws the turned head with them: :meth:`visemeface.render.renderer.Renderer.render`)."""
+    rot = rotation_matrices(np.asarray(head_deg, float).reshape(-1, 3))
+    m = np.zeros((len(rot), 4, 4))
+    m[:, :3, :3], m[:, 3, 3] = rot, 1.0
+    m[:, :3, 3] = pivot - rot @ np.asarray(pivot, float)
+    return m
+
+
 def rotate_head(vertices: np.ndarray, head_deg, pivot: np.ndarray) -> np.ndarray:
     """``vertices`` turned rigidly by one frame's (yaw, pitch, roll) degrees about ``pivot``."""
-    rot = rotation_matrices(np.asarray(head_deg, float)[None, :])[0]
+    m = head_matrices(head_deg, pivot)[0]
     v = np.asarray(vertices)
-    return ((v - pivot) @ rot.T + pivot).astype(v.dtype, copy=False)
+    return (v @ m[:3, :3].T + m[:3, 3]).astype(v.dtype, copy=False)
 
 
 def _qmul(a, b):
