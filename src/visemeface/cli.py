@@ -291,6 +291,8 @@ def _classes() -> dict:
             super().__init__(*args, **kwargs)
             self._negative_number_matcher = re.compile(r"^-\.?\d")
             self._basic: frozenset | None = None
+            if self.add_help:       # every command takes it; those with a short --help (show_basic) need it
+                self.add_argument("--help-all", action=_HelpAll, help="show every option and exit")
 
         def show_basic(self, options) -> None:
             """Make ``--help`` list only ``options`` (and ``--help-all`` every option)."""
@@ -299,7 +301,6 @@ def _classes() -> dict:
             if missing:
                 raise ValueError(f"{self.prog}: no option {sorted(missing)} to show in --help")
             self._basic = frozenset(options) | {"-h", "--help", "--help-all"}
-            self.add_argument("--help-all", action=_HelpAll, help="show every option and exit")
 
         def format_help_all(self) -> str:
             """The help with every option."""

@@ -49,3 +49,14 @@ def test_the_basic_options_are_options_of_their_command():
     for command, options in BASIC_OPTIONS.items():
         known = {s for a in _subparsers()[command]._actions for s in a.option_strings}
         assert set(options) <= known, command
+
+
+@pytest.mark.parametrize("command", sorted(c for c in _subparsers() if c not in BASIC_OPTIONS))
+def test_every_command_takes_help_all_and_lists_every_option(command, capsys):
+    """Every command's help names ``--help-all`` (its hint line does), so every command takes it, required
+    arguments or not."""
+    with pytest.raises(SystemExit) as exc:
+        main([command, "--help-all"])
+    assert exc.value.code == 0
+    parser = _subparsers()[command]
+    assert _listed(capsys.readouterr().out) >= {a.option_strings[0] for a in parser._actions if a.option_strings}

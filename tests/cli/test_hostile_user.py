@@ -6,6 +6,8 @@ import sys
 import numpy as np
 import pytest
 
+from visemeface.cli import main
+
 
 def _visemeface(cwd, *argv):
     proc = subprocess.run([sys.executable, "-m", "visemeface", *argv], cwd=cwd, capture_output=True, text=True,
@@ -117,3 +119,29 @@ def test_save_transcript_onto_another_output_is_refused_before_work(tmp_path, mo
     assert capsys.readouterr().err == ("visemeface: error: same.json: --save-transcript and another output are "
                                        "the same path\n")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.wav"]
+
+
+@pytest.mark.parametrize("face, message", [
+    ("ictt", "--face ictt: no such mesh file, and no built-in face of that name (did you mean: ict?)"),
+    ("nope.obj", "--face nope.obj: no such mesh file"),
+])
+def test_a_misspelt_face_is_named_with_the_built_in_ones(tmp_path, monkeypatch, capsys, face, message):
+    monkeypatch.chdir(tmp_path)
+    assert main(["pose", "aa", "--face", face, "-o", "x.png"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and message in err and "built in: procedural, ict" in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_built_in_face_in_capitals_is_the_built_in_one():
+    from visemeface.face import chosen_face
+
+    assert chosen_face("ICT").n_vertices == chosen_face("ict").n_vertices
+
+
+def test_a_folder_given_as_the_transcript_is_named_a_folder(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "d").mkdir()
+    assert main(["speak", "d", "-o", "x.mp4"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "d: transcript is a folder, not a file" in err and sorted(p.name for p in tmp_path.iterdir()) == ["d"]

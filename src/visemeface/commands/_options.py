@@ -97,6 +97,11 @@ def number(low: float | None = None, high: float | None = None, **kw):
 
 # --------------------------------------------------------------------------- face and rig
 
+def rig_help() -> str:
+    """The help of ``--rig`` (the same on every command that takes it)."""
+    return "rig file (default: the package's own data/rig/default.toml, a commented TOML to copy and edit)"
+
+
 def add_face_arguments(p: argparse.ArgumentParser, skin: bool = True) -> None:
     """``--face MESH``, ``--landmarks JSON``, ``--rig TOML`` (and ``--skin TYPE`` unless ``skin`` is False)."""
     g = p.add_argument_group("face")
@@ -105,7 +110,7 @@ def add_face_arguments(p: argparse.ArgumentParser, skin: bool = True) -> None:
     g.add_argument("--identity", metavar="SEED|W,...", help="with --face ict: a speaker from ICT's identity space, "
                    "drawn by an integer seed or given as weights of its first modes (standard deviations, +-3)")
     g.add_argument("--landmarks", metavar="JSON", help="landmarks sidecar of --face, if not beside it")
-    g.add_argument("--rig", metavar="TOML", help="rig file (default: the shipped data/rig/default.toml)")
+    g.add_argument("--rig", metavar="TOML", help=rig_help())
     if skin:
         add_skin_argument(g)
 
@@ -215,7 +220,7 @@ def add_physics_arguments(p: argparse.ArgumentParser, default: str, choices: tup
                    help="sticky: the FEM face with saliva that glues the lips until it breaks; elastic: the same "
                    "FEM without glue" + ("; none: the kinematic rig" if "none" in choices else "")
                    + " (the FEM costs about 8 s per second of speech on 2 cores)")
-    from visemeface.physics.config import MAX_SEAM_ELEMENTS
+    from visemeface.physics.config import MAX_SEAM_ELEMENTS, keys_summary
     from visemeface.physics.glue import MAX_GLUE
 
     g.add_argument("--lips", choices=LIPS, default=LIPS[0],
@@ -225,7 +230,7 @@ def add_physics_arguments(p: argparse.ArgumentParser, default: str, choices: tup
                    "change either")
     g.add_argument("--physics-config", type=Path, metavar="FILE.toml", help="the physical face's other "
                    "parameters (damping, hourglass control, saliva moisture and decay, ...), read over --lips; "
-                   "the options here win over it (the keys: docs/formats/physics-config.md)")
+                   f"the options here win over it (TOML; its keys: {keys_summary()})")
     g.add_argument("--glue", type=number(0, MAX_GLUE), metavar="G",
                    help=f"glue strength K_glue, 0 to {MAX_GLUE:g} (default 0.08)")
     g.add_argument("--glue-profile", metavar="SPEC", help="glue across the mouth over --glue, e.g. "

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from visemeface.commands._options import Help
+from visemeface.commands._options import Help, rig_help
 
 ORDER = 21
 
@@ -20,7 +20,7 @@ def register(subparsers) -> None:
         epilog="examples:\n  visemeface muscles\n  visemeface muscles --csv > muscles.csv",
     )
     p.add_argument("--csv", action="store_true", help="print CSV instead of an aligned table")
-    p.add_argument("--rig", metavar="TOML", help="rig file (default: the shipped data/rig/default.toml)")
+    p.add_argument("--rig", metavar="TOML", help=rig_help())
     p.set_defaults(func=run)
 
 

@@ -212,7 +212,8 @@ def run(args) -> int:
     from visemeface.speech.audio import is_recording, media_wav
 
     if not args.transcript.is_file():
-        raise InputError("transcript not found", args.transcript)
+        raise InputError("transcript is a folder, not a file" if args.transcript.is_dir() else "transcript not found",
+                         args.transcript)
     sinks, render, physics, saved = check_early(
         args, Path.cwd() / (args.transcript.stem + ".mp4"), inputs=[args.transcript],
         recording=args.transcript if is_recording(args.transcript) else None)

@@ -35,8 +35,16 @@ def chosen_face(face: str | None = None, identity=None, landmarks=None):
     """The face a command's ``--face``/``--identity``/``--landmarks`` (a batch's same fields) name: a
     built-in one by name (:data:`BUILTIN_FACES`) or a mesh file with its landmarks; None for the default
     (the embedded procedural face)."""
-    from visemeface.errors import InputError
+    from pathlib import Path
 
+    from visemeface.errors import InputError, close_matches
+
+    if face and face not in BUILTIN_FACES and not Path(face).exists():
+        if face.strip().lower() in BUILTIN_FACES:
+            face = face.strip().lower()
+        else:
+            raise InputError(f"--face {face}: no such mesh file, and no built-in face of that name"
+                             f"{close_matches(face.lower(), BUILTIN_FACES)} (built in: {', '.join(BUILTIN_FACES)})")
     if landmarks and not face:
         raise InputError("--landmarks needs --face")
     if face in BUILTIN_FACES:

@@ -3,7 +3,7 @@
 ``--physics-config FILE.toml`` (``speak``, ``say``, ``simulate``) reads this file over the lips ``--lips``
 chose, and options given on the command line win over it. Every key is optional; a key the file does not
 know, a value of the wrong type or outside its range is refused in one line naming the file, the line and
-the key. The keys and their ranges are :data:`KEYS`; ``docs/formats/physics-config.md`` shows a file holding
+the key. The keys and their ranges are :data:`KEYS` (:func:`keys_summary` lists them); ``docs/formats/physics-config.md`` shows a file holding
 the speech lips' defaults (a test reads it back to :meth:`PhysicsSettings.speech`).
 
 Top-level keys are :class:`~visemeface.physics.simulation.PhysicsSettings` fields, those of the
@@ -68,6 +68,13 @@ def _keys() -> dict:
 
 KEYS = _keys()
 TABLES = ("saliva",)
+
+
+def keys_summary() -> str:
+    """The keys a physics configuration file may hold, as the help lists them: ``a, b; [table] c, d``."""
+    groups = [", ".join(k for k, spec in KEYS.items() if spec[0] is None)]
+    groups += [f"[{t}] " + ", ".join(k for k, spec in KEYS.items() if spec[0] == t) for t in TABLES]
+    return "; ".join(groups)
 
 
 def _line_of(text: str, key: str, table: bool = False) -> int | None:
