@@ -173,6 +173,35 @@ def test_identity_is_deterministic_bounded_and_distinct():
         builtin_face("procedural", identity=3)
 
 
+def test_a_speaker_drawn_from_the_identity_modes_looks_ahead_as_the_neutral_does():
+    """ICT's modes turn the eyeballs too (identity 3's right eye 2.6 degrees further out, identity 6's both 6 up);
+    a drawn speaker's eyes are re-aimed, rigidly about their centres, to the neutral's primary gaze."""
+    from visemeface.face.ict import _OUTER_SHELL, _eye_axis, _store
+
+    neutral, p = ict_face(), parts()
+    store = _store()
+    for seed in (3, 6):
+        w = identity_weights(seed)
+        raw = store["vertices"].astype(float) + np.tensordot(np.asarray(w), store["identities"][: len(w)].astype(float),
+                                                             axes=1)
+        face = ict_face(w)
+        turned = 0.0
+        for side in ("left", "right"):
+            ball = p[f"eyeball_{side}"]
+            _, want = _eye_axis(neutral.vertices[ball[:_OUTER_SHELL]])
+            centre, got = _eye_axis(face.vertices[ball[:_OUTER_SHELL]])
+            _, before = _eye_axis(raw[ball[:_OUTER_SHELL]])
+            assert np.degrees(np.arccos(min(1.0, got @ want))) < 0.1
+            turned = max(turned, np.degrees(np.arccos(min(1.0, before @ want))))
+            # rigid about the centre: every distance from it kept
+            np.testing.assert_allclose(np.linalg.norm(face.vertices[ball] - centre, axis=1),
+                                       np.linalg.norm(raw[ball] - centre, axis=1), atol=1e-9)
+        assert turned > 2.0                                  # the modes had turned them
+        eyes = np.concatenate([p["eyeball_left"], p["eyeball_right"]])
+        rest = np.setdiff1d(np.arange(face.n_vertices), eyes)
+        np.testing.assert_array_equal(face.vertices[rest], raw[rest])     # nothing else moved
+
+
 def test_the_face_view_frames_a_whole_head_by_its_face():
     from visemeface.render.renderer import Renderer
 

@@ -51,7 +51,7 @@ COLOURS = {"skin": (0.80, 0.60, 0.50), "lip": (0.70, 0.40, 0.40), "sclera": (0.9
 #: The mouth corners move as one piece (:data:`~visemeface.face.mesh.MESH_RIG_DEFAULTS`): the scan's lip rows
 #: converge on each corner 0.1-0.2 mm apart, and without it 64 triangles beside the corners turned over on /aa/
 #: (the upper lip's corners hooked down) and 2,426 over the visemes and the emotions blended with /aa/ and /uw/.
-#: The eyeballs are spheres (15.8 mm): each turns whole and exactly about its own centre (``[gaze] rigid``),
+#: The eyeballs are spheres (radius 15.8 mm): each turns whole and exactly about its own centre (``[gaze] rigid``),
 #: where the default face's flattened caps turn only their front, linearised, about a point 9.5 mm behind it.
 RIG_DEFAULTS = {"jaw": {"neck_fade_deg": 30.0, "max_drop": 0.421}, "defaults": {"attachment_fade": 0.6},
                 "gaze": {"rigid": True}, **MESH_RIG_DEFAULTS}
@@ -118,14 +118,39 @@ def _eye_axis_distance(P: np.ndarray, shell: np.ndarray) -> tuple[np.ndarray, np
     The centre is the sphere fitted to the outer shell; the axis runs from it through the cornea's apex (the
     shell's farthest point from the centre: the cornea bulges about 1 mm past the sclera's sphere). Painted by
     this distance, the iris and pupil are round and centred under the cornea, as they are in a real eye."""
-    centre, _ = sphere_fit(shell)
-    d = shell - centre
-    axis = d[np.argmax(np.einsum("ij,ij->i", d, d))]
-    axis = axis / np.linalg.norm(axis)
+    centre, axis = _eye_axis(shell)
     r = P - centre
     along = r @ axis
     rho = np.linalg.norm(r - np.outer(along, axis), axis=1)
     return rho, along > 0.0
+
+
+def _eye_axis(shell: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """An eyeball's centre (the sphere fitted to its outer ``shell``) and optical axis (unit, to the cornea's apex,
+    the shell's farthest point from the centre)."""
+    centre, _ = sphere_fit(shell)
+    d = shell - centre
+    axis = d[np.argmax(np.einsum("ij,ij->i", d, d))]
+    return centre, axis / np.linalg.norm(axis)
+
+
+def _aim_eyes(V: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """``V`` with each eyeball turned about its centre so that it looks where ``reference``'s does.
+
+    ICT's identity modes turn the eyeballs as well as shaping them (at 1 sigma a few degrees each way, one eye
+    differently from the other: `--identity 3` looked outward by 11.0 against 8.4 degrees); where a person
+    looks is not who they are, so a speaker drawn from the modes keeps the generic neutral's primary gaze
+    (each optical axis about 8 degrees outward of straight ahead, as the anatomical axis is of the visual)."""
+    out = np.array(V, dtype=np.float64)
+    for side in ("left", "right"):
+        ball = parts()[f"eyeball_{side}"]
+        centre, a = _eye_axis(out[ball[:_OUTER_SHELL]])
+        _, b = _eye_axis(reference[ball[:_OUTER_SHELL]])
+        v, c = np.cross(a, b), float(a @ b)
+        K = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+        R = np.eye(3) + K + K @ K / (1.0 + c)              # the least rotation taking a to b
+        out[ball] = (out[ball] - centre) @ R.T + centre
+    return out
 
 
 def _colours(V: np.ndarray, regions: dict) -> np.ndarray:
@@ -155,7 +180,7 @@ def _ict_face_cached(identity: tuple):
     V = s["vertices"].astype(np.float64)
     if identity:
         modes = s["identities"].astype(np.float64)
-        V = V + np.tensordot(np.asarray(identity, float), modes[: len(identity)], axes=1)
+        V = _aim_eyes(V + np.tensordot(np.asarray(identity, float), modes[: len(identity)], axes=1), V)
     return face_on(V)
 
 
