@@ -68,11 +68,12 @@ def eyeball_coefficients(activations: np.ndarray, eyes: list[EyeballTurns]) -> t
     """The functions' coefficients (..., M) with each eyeball's turns scaled by :math:`f(\theta)`, and each
     eyeball's pair coefficients (..., pairs) :math:`\theta_i \theta_j g(\theta)`."""
     a = np.asarray(activations, dtype=np.float64)
+    if eyes:
+        a = a.copy()                        # scaled in place below, the caller's array left as it is
     pairs = []
     for eye in eyes:
         t = a[..., eye.indices] * eye.angles
         size = np.linalg.norm(t @ eye.axes, axis=-1, keepdims=True)
-        a = a.copy()
         a[..., eye.indices] = a[..., eye.indices] * np.sinc(size / np.pi)              # sin(x) / x
         pairs.append(t[..., eye.pairs[0]] * t[..., eye.pairs[1]] * 0.5 * np.sinc(size / (2 * np.pi)) ** 2)
     return a, pairs
