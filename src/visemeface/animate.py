@@ -93,7 +93,8 @@ def simulated_motion(rig, track, physics: str, settings=None):
 def animate(utterance, sinks: list, render=None, *, rig=None, emotions=None, interp: str | None = None,
             fps: float = 30.0, audio=None, physics: str | None = None, physics_settings=None,
             checkpoint: Callable | None = None, resume: bool = False, show_progress: bool = True, source: str = "text",
-            blink: bool = True, articulation: float = 1.0, gestures: bool = True, seed: int = 0):
+            blink: bool = True, articulation: float = 1.0, gestures: bool = True, seed: int = 0, also=(),
+            final: bool = False):
     """Animate ``utterance`` into ``sinks``; returns the run's :class:`~visemeface.pipeline.RunStats`.
 
     Parameters
@@ -134,6 +135,9 @@ def animate(utterance, sinks: list, render=None, *, rig=None, emotions=None, int
         yaw/pitch/roll per frame) for the renderer, Live Link and glTF.
     seed : int
         The gestures' (deterministic) random choices.
+    also, final :
+        More staged outputs put in place with the sinks', and whether they are the command's last
+        (:func:`visemeface.pipeline.run`).
     """
     from visemeface import pipeline
     from visemeface.motion import KinematicMotion
@@ -179,4 +183,4 @@ def animate(utterance, sinks: list, render=None, *, rig=None, emotions=None, int
                                   extra={"motion_key": motion.key(), "utterance": utterance,
                                          "interp": interp or MODES[0], "source": source, **extra}),
                         checkpoint=checkpoint(motion) if checkpoint is not None else None,
-                        resume=resume, show_progress=show_progress)
+                        resume=resume, show_progress=show_progress, also=also, final=final)

@@ -43,6 +43,10 @@ def _exit_now(signum=None, frame=None):
 
 #: Set by the first signal of a running command (so an error the interrupt was turned into is reported as it).
 _received = False
+#: Whether :func:`main` runs as the program (``argv`` None), not called by a script or test.
+_program = False
+#: Set once the program's command has put its last outputs in place (:func:`_landed`).
+_landed_outputs = False
 
 
 class _Muted:
@@ -69,12 +73,32 @@ class _Muted:
 def _raise_interrupt(signum, frame):
     """The first Ctrl-C/SIGTERM of a running command: unwind as KeyboardInterrupt; a second: :func:`_exit_now`."""
     global _received
+    if _landed_outputs:
+        for s in _SIGNALS:
+            signal.signal(s, _exit_done)
+        return
     _received = True
     for s in _SIGNALS:
         signal.signal(s, _exit_now)
     if not isinstance(sys.stderr, _Muted):
         sys.stderr = _Muted(sys.stderr)
     raise KeyboardInterrupt
+
+
+def _landed():
+    """The command's last outputs are in place (:func:`visemeface.runtime.landing`). As the program, a signal
+    from now on, while the command only returns (its summary, its temporaries' removal), does not make a
+    finished run read as interrupted (status 130 beside whole outputs, which a script would take for a run
+    that stopped part way and run again, to be refused by the outputs it left): the first is let pass and
+    the command ends as it would have; a second ends the process at once with status 0."""
+    global _landed_outputs
+    _landed_outputs = _program
+
+
+def _exit_done(signum=None, frame=None):
+    import os
+
+    os._exit(EXIT["done"])
 
 
 def _take_signals(handler):
@@ -93,8 +117,8 @@ def main(argv: list[str] | None = None) -> int:
     interrupted line and 130, and one after it is done at once with its status; called with ``argv`` (tests,
     scripts) a signal raises KeyboardInterrupt throughout, and the caller's handlers are put back.
     """
-    global _received
-    _received = False
+    global _received, _program, _landed_outputs
+    _received, _program, _landed_outputs = False, argv is None, False
     previous = _take_signals(_exit_now if argv is None else _raise_interrupt)
     try:
         status = _main(argv, armed=previous is not None)
@@ -196,7 +220,11 @@ def _main(argv, armed: bool):
 
     configure()
     if armed:
+        from visemeface.runtime import LANDED
+
         _take_signals(_raise_interrupt)
+        if _landed not in LANDED:
+            LANDED.append(_landed)
     try:
         return int(args.func(args) or 0)
     except (VisemefaceError, ModuleNotFoundError) as exc:

@@ -37,6 +37,7 @@ from visemeface.errors import InputError, SimulationDiverged
 from visemeface.export.sinks import RunInfo, Sink, check_distinct
 from visemeface.motion import Motion
 from visemeface.outputs import progress
+from visemeface.runtime import landing
 
 #: Frame sizes the renderer accepts: positive multiples of 16 (video codecs and GL alignment).
 SIZE_STEP = 16
@@ -111,7 +112,7 @@ def _feed(frame, renderer, sinks, stats, n_vertices: int, head=None) -> None:
 
 def run(motion: Motion, sinks: list[Sink], render: RenderSettings | None = None, info: dict | None = None,
         checkpoint=None, resume: bool = False, checkpoint_every: int = 1,
-        show_progress: bool = True) -> RunStats:
+        show_progress: bool = True, also=(), final: bool = False) -> RunStats:
     """Stream ``motion`` into ``sinks`` (see the module docstring).
 
     Parameters
@@ -130,6 +131,10 @@ def run(motion: Motion, sinks: list[Sink], render: RenderSettings | None = None,
         Continue from ``checkpoint`` (and reuse the frames sinks' kept images).
     checkpoint_every : int
         Frames between saved states.
+    also : list of Staged
+        More outputs the caller has written (a transcript), put in place with the sinks' (not aborted here).
+    final : bool
+        The sinks (and ``also``) are the command's last outputs (:func:`visemeface.runtime.landing`).
     """
     if not sinks:
         raise InputError("nothing to write: give an output")
@@ -138,30 +143,30 @@ def run(motion: Motion, sinks: list[Sink], render: RenderSettings | None = None,
     stats = RunStats(frames=motion.n_frames)
     done, state = checkpoint.load() if (checkpoint is not None and resume) else (0, None)
     need_image = any(s.needs_image for s in sinks)
-    with contextlib.ExitStack() as stack:
-        renderer = head = None
-        run_info = RunInfo(face=motion.face, fps=motion.fps, n_frames=motion.n_frames, **(info or {}))
-        if run_info.extra.get("head") is not None:
-            import numpy as np
+    run_info = RunInfo(face=motion.face, fps=motion.fps, n_frames=motion.n_frames, **(info or {}))
+    opened = []
+    try:   # an error or interrupt anywhere, the renderer's closing included, removes the temporaries
+        with contextlib.ExitStack() as stack:
+            renderer = head = None
+            if run_info.extra.get("head") is not None:
+                import numpy as np
 
-            from visemeface.motion import digest
-            from visemeface.speech.gestures import head_matrices, head_pivot
+                from visemeface.motion import digest
+                from visemeface.speech.gestures import head_matrices, head_pivot
 
-            angles = np.asarray(run_info.extra["head"], dtype=np.float64)
-            head = head_matrices(angles, head_pivot(motion.face.vertices))
-            run_info.extra.setdefault("render_key", f"{render.key()}/head:{digest(angles)[:16]}")
-        run_info.extra.setdefault("render_key", render.key())
-        if need_image:
-            from visemeface.render.renderer import Renderer
+                angles = np.asarray(run_info.extra["head"], dtype=np.float64)
+                head = head_matrices(angles, head_pivot(motion.face.vertices))
+                run_info.extra.setdefault("render_key", f"{render.key()}/head:{digest(angles)[:16]}")
+            run_info.extra.setdefault("render_key", render.key())
+            if need_image:
+                from visemeface.render.renderer import Renderer
 
-            # the renderer turns the head (a model matrix per frame); a turned head shows what the still
-            # triangles hid at rest (through the moving lips, between the teeth), so none is culled
-            renderer = stack.enter_context(Renderer(motion.render_face, size=(render.size, render.size),
-                                                    view=render.view, samples=render.msaa,
-                                                    still=None if head is not None else motion.still_vertices()))
-            run_info.size, run_info.mouth_box = render.size, renderer.mouth_box()
-        opened = []
-        try:
+                # the renderer turns the head (a model matrix per frame); a turned head shows what the still
+                # triangles hid at rest (through the moving lips, between the teeth), so none is culled
+                renderer = stack.enter_context(Renderer(motion.render_face, size=(render.size, render.size),
+                                                        view=render.view, samples=render.msaa,
+                                                        still=None if head is not None else motion.still_vertices()))
+                run_info.size, run_info.mouth_box = render.size, renderer.mouth_box()
             for s in sinks:
                 try:
                     s.open(run_info)
@@ -173,18 +178,21 @@ def run(motion: Motion, sinks: list[Sink], render: RenderSettings | None = None,
             _stream(motion, sinks, renderer, checkpoint, done, state, checkpoint_every, stats, show_progress, head)
             for s in sinks:
                 s.close()
-        except BaseException as exc:
-            diverged = isinstance(exc, SimulationDiverged)   # deterministic: a resumed run diverges again
-            run_info.resumable = not diverged
-            for s in opened:
-                s.abort()
-            if checkpoint is not None:
-                checkpoint.remove() if diverged else checkpoint.close()
-            raise
+    except BaseException as exc:
+        diverged = isinstance(exc, SimulationDiverged)   # deterministic: a resumed run diverges again
+        run_info.resumable = not diverged
+        for s in opened:
+            s.abort()
+        if checkpoint is not None:
+            checkpoint.remove() if diverged else checkpoint.close()
+        raise
+    with landing(final):             # after the renderer is closed; all the outputs or none of them
         for s in sinks:
             stats.written += s.commit()
-    if checkpoint is not None:
-        checkpoint.remove()
+        for s in also:
+            s.commit()
+        if checkpoint is not None:
+            checkpoint.remove()
     noted = RUNS.get()
     if noted is not None:
         noted.append(stats)

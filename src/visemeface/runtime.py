@@ -202,26 +202,39 @@ def set_threads(n: int | None) -> int:
     return numba.get_num_threads()
 
 
+#: Called in order when a command's outputs are all in place (:func:`landing` with ``final``). The command
+#: line adds its own: a signal after that ends a finished run, not an interrupted one.
+LANDED: list = []
+
+
 @contextlib.contextmanager
-def signals_deferred():
+def signals_deferred(then=None):
     """A context in which Ctrl-C and SIGTERM wait: the first that comes is delivered when the body ends.
 
     For starting a child process that writes a file (ffmpeg): interrupted half way through its start, the
     child runs on unseen by the code that would end it and writes its file after the interrupted run removed
     its temporaries. Deferred, the interrupt comes after the start, where the child is ended and its file
-    removed. Outside the main thread (where signals cannot be set) the body runs as it is.
+    removed. ``then`` is called once the body has ended without an error, before the handlers are put back
+    (no signal can come between the body and it). Outside the main thread (where signals
+    cannot be set) the body runs as it is.
     """
     import signal
     import threading
 
     if threading.current_thread() is not threading.main_thread():
         yield
+        if then is not None:
+            then()
         return
     came = []
     kept = {s: signal.signal(s, lambda signum, frame: came.append(signum)) for s in (signal.SIGINT, signal.SIGTERM)}
+    ended = False
     try:
         yield
+        ended = True
     finally:
+        if ended and then is not None:
+            then()                                 # while a signal still waits: it meets what ``then`` did
         for s, handler in kept.items():
             signal.signal(s, handler)
         if came:
@@ -230,3 +243,16 @@ def signals_deferred():
                 handler(came[0], None)             # the command's handler: KeyboardInterrupt, or the exit
             elif handler == signal.SIG_DFL:
                 signal.raise_signal(came[0])
+
+
+def _landed() -> None:
+    for hook in LANDED:
+        hook()
+
+
+def landing(final: bool = False):
+    """A context in which a run's outputs go into place together (their renames): Ctrl-C and SIGTERM wait
+    until the body ends, so a run never stops with some of its outputs in place and others not. ``final``:
+    these are the command's last outputs; once they are in, :data:`LANDED`'s hooks run (the command line's
+    takes a signal from then on as the end of a finished run: its outputs are whole and in place)."""
+    return signals_deferred(then=_landed if final else None)

@@ -156,3 +156,42 @@ def test_a_signal_at_any_early_moment_of_any_command_is_one_line_and_130(tmp_pat
     for at in (0.1, 0.5, 1.0, 2.0):
         for sig in (signal.SIGINT, signal.SIGTERM):
             _check(tmp_path, inputs, command, at, sig, startup)
+
+
+def test_a_signal_as_the_outputs_land_ends_a_finished_run_with_its_outputs_whole(tmp_path):
+    """The signal in the last window (the outputs renamed into place, the command returning) came in CI as
+    ``speak`` ended: it read as interrupted (130) beside its whole video and sidecar. Sent here exactly there
+    (from a hook run as the last outputs land), the run ends as done, every output in place; one sent before
+    the outputs land (as the transcript is written) still leaves nothing."""
+    code = ("import os, signal, sys\n"
+            "from visemeface import runtime\n"
+            "runtime.LANDED.append(lambda: os.kill(os.getpid(), signal.SIGTERM))\n"
+            "from visemeface.cli import main\n"
+            "sys.argv = ['visemeface', *sys.argv[1:]]\n"
+            "main()\n")
+    argv = ["speak", str(transcripts_path("bob_moves_five_boats.txt")), "-o", "out.mp4", "--size", "32",
+            "--msaa", "0", "-q", "--save-transcript", "out.json"]
+    done = subprocess.run([sys.executable, "-c", code, *argv], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0 and done.stderr == "", done.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.json", "out.mp4"]     # no temporaries
+
+
+def test_outputs_land_together_and_a_signal_meanwhile_waits_for_them():
+    from visemeface.runtime import LANDED, landing
+
+    came, order = [], []
+    kept = signal.signal(signal.SIGTERM, lambda signum, frame: came.append(len(order)))
+    LANDED.append(lambda: order.append("landed"))
+    try:
+        with landing(final=True):
+            signal.raise_signal(signal.SIGTERM)
+            order.append("renamed")
+            assert came == []                    # not delivered inside
+        assert order == ["renamed", "landed"] and came == [2]   # delivered after the hooks ran
+        with landing():
+            pass
+        assert order == ["renamed", "landed"]    # not the command's last outputs: no hook
+    finally:
+        LANDED.pop()
+        signal.signal(signal.SIGTERM, kept)

@@ -114,7 +114,7 @@ def run(args) -> int:
     checkpoint = opt.checkpoint_of(motion, sinks, args)
     stats = pipeline.run(motion, sinks, render,
                          info=dict(rig=rig, track=track, extra={"motion_key": motion.key()}),
-                         checkpoint=checkpoint, resume=args.resume, show_progress=not args.quiet)
+                         checkpoint=checkpoint, resume=args.resume, show_progress=not args.quiet, final=True)
     if not args.quiet:
         c = motion.sim.fem.counts()
         print(f"FEM face: {c['nodes']} nodes, {c['elements']} hexahedra ({c['saliva']} saliva); "

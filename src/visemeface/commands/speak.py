@@ -118,6 +118,7 @@ def animate_utterance(utterance, args, sinks, render, physics, audio=None, saved
     """
     from visemeface import pipeline
     from visemeface.animate import animate
+    from visemeface.runtime import landing
     from visemeface.speech.writers import format_of, write_transcript
 
     try:
@@ -128,13 +129,15 @@ def animate_utterance(utterance, args, sinks, render, physics, audio=None, saved
             fps=args.fps, audio=args.audio if audio is None else audio, physics=args.physics,
             physics_settings=physics, checkpoint=lambda motion: opt.checkpoint_of(motion, sinks, args),
             resume=args.resume, show_progress=not args.quiet, source=str(getattr(args, "transcript", None) or "text"),
-            blink=not args.no_blink, articulation=args.articulation, gestures=not args.no_gestures)
+            blink=not args.no_blink, articulation=args.articulation, gestures=not args.no_gestures,
+            also=[saved] if saved is not None else [], final=True)
+        if stats is None and saved is not None:
+            with landing(final=True):
+                saved.commit()
     except BaseException:
         if saved is not None:
             saved.abort()
         raise
-    if saved is not None:
-        saved.commit()
     if not args.quiet:
         if stats is not None:
             print(pipeline.summary(stats, args.fps))
