@@ -127,3 +127,31 @@ def test_the_lids_follow_a_vertical_gaze_and_the_corners_stay(face):
             dx = np.abs(rest[lid, 0] - rest[pupil, 0])
             corners = lid[dx > 0.012]
             assert np.abs(posed[corners] - rest[corners]).max() < 0.3 * abs(rise)
+
+
+@pytest.mark.parametrize("face", ["procedural", "ict"])
+def test_closed_lids_cover_the_whole_eye_in_a_render(face):
+    """The upper lid closed (AU43, the lower lid left where it is, and the blink's with it raised) leaves no
+    eye white between the margins, across the whole eye, at 512 px with antialiasing and 256 px without.
+    Its push was a Gaussian alone, which left 0.2-0.8 mm of white along the closed eye on both faces
+    (ICT: 87-168 such pixels at 512 px); it is now sized by each face's own opening."""
+    from visemeface.muscles.rig import rig_for
+    from visemeface.render.renderer import Renderer
+
+    rig = rig_for(face)
+    sides = ("left", "right")
+    for size, samples in ((512, 4), (256, 0)):
+        with Renderer(rig.face, size=size, view="face", samples=samples) as r:
+            for lower in (0.0, 0.4, None):
+                v = rig.face.vertices if lower is None else rig.pose(
+                    {**{f"upper_lid_close_{s}": 1.0 for s in sides}, **{f"lower_lid_raise_{s}": lower for s in sides}})
+                white = _sclera(r.render(v))
+                n = 0
+                for side in sides:
+                    u, vv, k = _eye(r, rig.face, side)      # 1 mm over the eye's centre to 6 below, 14 mm either side
+                    n += int(white[int(vv - 0.001 * k):int(vv + 0.006 * k) + 1,
+                                   int(u - 0.014 * k):int(u + 0.014 * k) + 1].sum())
+                if lower is None:
+                    assert n > size // 5, (size, n)         # open, the measure sees the whites
+                else:
+                    assert n == 0, (face, size, lower, n)

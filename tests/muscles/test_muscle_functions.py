@@ -217,3 +217,28 @@ def test_the_modiolus_moves_a_corner_as_one_piece_and_leaves_the_rest():
     assert abs(j[inner][0] - jaw[inner].mean()) < 1e-12
     untouched = (d >= radius) | held
     assert np.array_equal(b[0, untouched], apart[untouched]) and np.array_equal(j[untouched], jaw[untouched])
+
+
+def test_a_closing_push_is_sized_by_the_gap_it_closes():
+    """An upper margin 5 mm over a flat lower one in the middle, 1 mm at +-9 mm, pushed down by a Gaussian
+    of 3 mm: sized, every column of the open eye meets the lower margin and the overlap past it; the row above
+    moves by the same factor as the margin below it; a lower row (the target) and far points do not move."""
+    from visemeface.muscles.functions import closing_scale
+
+    x = np.linspace(-0.010, 0.010, 41)
+    gap = 0.005 - 0.004 * (x / 0.009) ** 2
+    margin = np.stack([x, gap, np.zeros_like(x)], 1)
+    above = margin + [0.0, 0.003, 0.0]
+    lower = np.stack([x, np.zeros_like(x), np.zeros_like(x)], 1)
+    points = np.vstack([margin, above, lower])
+    push = 0.003 * np.exp(-(points[:, 0] / 0.008) ** 2)
+    push[82:] = 0.0                                         # the target does not move
+    field = np.stack([np.zeros_like(push), -push, np.zeros_like(push)], 1)
+    s = closing_scale(points, field, np.arange(82, 123), np.eye(3), overlap=0.0002)
+    closed = points + field * s[:, None]
+    open_ = np.abs(x) < 0.008                               # where the gap is over a quarter of its widest
+    np.testing.assert_allclose(closed[:41][open_, 1], -0.0002, atol=4e-5)   # between columns: interpolated
+    np.testing.assert_allclose(s[41:82], s[:41])
+    assert np.all(s[82:] == 1.0)
+    # no push, or no target: nothing changes
+    assert np.all(closing_scale(points, np.zeros_like(field), np.arange(82, 123), np.eye(3)) == 1.0)

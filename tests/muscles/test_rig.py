@@ -427,9 +427,10 @@ def test_a_blink_closes_both_eyes_and_moves_nothing_else(rig):
         lo = near(face.regions["lower_lids"])
         upper_margin = up[np.argmin(face.vertices[up, 1])]
         lower_margin = lo[np.argmax(face.vertices[lo, 1])]
-        # open at rest (about 9 mm), shut in the blink (the margins meet within 1 mm)
+        # open at rest (about 9 mm), shut in the blink: the upper margin comes 0.5 mm past the lower (the rig
+        # file's overlap: margins about 2 mm thick pressed together) and the blink's lower lid rises 0.9 mm more
         assert face.vertices[upper_margin, 1] - face.vertices[lower_margin, 1] > 0.007
-        assert abs(shut[upper_margin, 1] - shut[lower_margin, 1]) < 0.001
+        assert 0.0 < shut[lower_margin, 1] - shut[upper_margin, 1] < 0.0015
         # the closed lid stays in front of the eyeball's front (no eye showing through)
         assert shut[upper_margin, 2] > eye[2]
 

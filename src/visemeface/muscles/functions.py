@@ -463,3 +463,37 @@ def series_degree(theta_max: float, radius: float, tolerance: float = 1e-10) -> 
     while theta_max ** (degree + 1) / factorial(degree + 1) * radius > tolerance and degree < 40:
         degree += 1
     return degree
+
+
+def closing_scale(points: np.ndarray, field: np.ndarray, target: np.ndarray, axes: np.ndarray,
+                  overlap: float = 0.0, column: float = 1e-3, most: float = 3.0) -> np.ndarray:
+    """Per-vertex factors (N,) that size a downward ``field`` (N, 3), a Gaussian push (:func:`local_displacement`),
+    by the gap it closes (the eye's own opening): at each ``column`` (m) across the frame's x, the moved region's
+    lowest vertex (its margin) comes onto the highest of ``target`` (indices: the lid below) within a column of
+    it and ``overlap`` (m) past; interpolated in x between. Columns barely open (under a quarter of the widest)
+    or with a factor over twice the median (a margin the target's band misses), the corners, take their
+    neighbours'; columns the field hardly moves (under 5 % of its most) keep 1; factors are at most ``most``.
+    """
+    p = np.asarray(points, dtype=float) @ np.asarray(axes, dtype=float).T
+    dy = np.asarray(field, dtype=float) @ np.asarray(axes, dtype=float)[1]
+    moved = np.flatnonzero(-dy > 0.05 * max(float(-dy.min()), 0.0))
+    scale = np.ones(len(p))
+    if not len(moved):
+        return scale
+    target, got = np.asarray(target), []
+    for x in np.arange(p[moved, 0].min(), p[moved, 0].max() + column, column):
+        here = moved[np.abs(p[moved, 0] - x) <= 0.5 * column]
+        if not len(here):
+            continue
+        margin = here[np.argmin(p[here, 1])]
+        # the lid below: its highest within a column of the margin (a scan's rows do not fall in every column)
+        below = target[np.abs(p[target, 0] - p[margin, 0]) <= column]
+        if len(below):
+            got.append((p[margin, 0], p[margin, 1] - p[below, 1].max() + overlap, -dy[margin]))
+    if got:
+        x, need, travel = np.array(got).T
+        s, wide = need / travel, need > 0.25 * need.max()
+        keep = wide & (s < 2.0 * np.median(s[wide]))          # the corners take their neighbours'
+        on = (dy < 0) & (p[:, 0] >= p[moved, 0].min() - column) & (p[:, 0] <= p[moved, 0].max() + column)
+        scale[on] = np.interp(p[on, 0], x[keep], np.clip(s[keep], 0.0, most))
+    return scale

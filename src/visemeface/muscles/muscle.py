@@ -43,6 +43,8 @@ class Muscle:
     symmetric: bool = False                # "local": plus its mirror image about the mouth's mid-plane
     direction_lower: np.ndarray | None = None   # "local": the lower lip's direction (lip-trimmed), if any
     inner: float | None = None             # "local": a lateral band from this distance (m) instead of a Gaussian
+    close_to: np.ndarray | None = None     # "local": indices of the lid its margin closes onto (sized per column)
+    overlap: float = 0.0                   # "local": how far past ``close_to``'s margin it closes (m)
     axis: np.ndarray | None = None         # "turn": rotation axis (world), angle in ``k`` (radians at 1);
     #                                        ``inner`` is then the radius of the part that turns (m)
     lids: np.ndarray | None = None         # "turn": (N,) each lid vertex's share of the turn (0: none)
@@ -65,6 +67,8 @@ class Muscle:
                 c = self.centre - 2 * ((self.centre - frame.origin) @ ex) * ex
                 out = out + mf.local_displacement(points, c, self.radii, d - 2 * (d @ ex) * ex, self.mask,
                                                   frame.axes)
+            if self.close_to is not None and len(self.close_to):
+                out = out * mf.closing_scale(points, out, self.close_to, frame.axes, self.overlap)[:, None]
             return out
         if self.kind == "linear":
             d = mf.linear_muscle_displacement(points, self.attachment, self.insertion, self.zone_angle,

@@ -249,7 +249,8 @@ def _local_muscle(reader: _RigFileReader, table: Mapping, base: str, side: str, 
     functions move the tongue). ``symmetric = true`` adds the mirror image about
     the mouth's mid-plane; ``direction_lower`` moves the lower lip (lip-trimmed)
     differently from the upper; ``inner`` (W) makes the lateral falloff a band
-    (:func:`~visemeface.muscles.functions.local_displacement`).
+    (:func:`~visemeface.muscles.functions.local_displacement`); ``close_to`` (regions) and ``overlap`` (W)
+    size the push so that its margin meets theirs (:func:`~visemeface.muscles.functions.closing_scale`).
     """
     W = reader.frame.width
     names = reader.get(table, base, "regions", "regions", ())
@@ -277,6 +278,11 @@ def _local_muscle(reader: _RigFileReader, table: Mapping, base: str, side: str, 
         m.inner = reader.get(table, base, "inner", float) * W
         if m.inner < 0:
             raise reader.error(base, "inner", f"must be >= 0, got {table['inner']!r}")
+    if "close_to" in table:
+        # the lid this one closes onto: the push sized, column by column, by the eye's own opening
+        target = reader.regions(reader.get(table, base, "close_to", "regions"), base, "close_to")
+        m.close_to = np.unique(np.concatenate([reader.face.regions[r] for r in target] or [np.zeros(0, int)]))
+        m.overlap = reader.get(table, base, "overlap", float, 0.0) * W
     # a face without the regions (a user's mesh without a tongue) gets a zero field: no landmark needed
     m.centre = reader.point(table, base, "centre", side) if mask.any() else np.zeros(3)
 
