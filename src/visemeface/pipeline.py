@@ -45,6 +45,13 @@ SIZE_STEP = 16
 MSAA = (0, 2, 4, 8, 16)
 
 
+def check_msaa(n) -> int:
+    """``n`` antialiasing samples per pixel if it is one of :data:`MSAA`; else :class:`InputError`."""
+    if isinstance(n, bool) or n not in MSAA:
+        raise InputError(f"--msaa must be one of {', '.join(map(str, MSAA))}, got {n}")
+    return n
+
+
 @dataclass
 class RenderSettings:
     """How frames are rendered when a sink needs pixels."""
@@ -60,8 +67,7 @@ class RenderSettings:
 
         if self.size > MAX_SIZE:
             raise InputError(f"--size {self.size} is larger than the renderer's {MAX_SIZE} px")
-        if self.msaa not in MSAA:
-            raise InputError(f"--msaa must be one of {', '.join(map(str, MSAA))}, got {self.msaa}")
+        check_msaa(self.msaa)
         if self.view not in VIEWS:
             raise InputError(f"--view must be one of {', '.join(VIEWS)}, got {self.view!r}")
         return self

@@ -92,3 +92,18 @@ def test_pose_a_loaded_mesh_with_landmarks(tmp_path, capsys):
     assert main(["pose", "--face", str(mesh), "--set", "jaw=0.5", "-o", str(out), "--size", "64"]) == 0
     assert "opening_height=" in capsys.readouterr().out and out.exists()
     assert main(["pose", "--face", str(tmp_path / "none.obj"), "-o", str(tmp_path / "n.png")]) == 2
+
+
+@pytest.mark.parametrize("command", [["pose", "aa"], ["sheet", "--emotions"], ["face"]])
+def test_still_pictures_take_msaa_as_the_animating_commands_do(tmp_path, capsys, command):
+    """`pose`, `sheet` and `face` render at --msaa N like `speak` (0: hard edges, as a frame of a fast run),
+    and refuse a count the renderer has not in one line, writing nothing."""
+    size = ["--size", "64"]
+    smooth, hard = tmp_path / "smooth.png", tmp_path / "hard.png"
+    assert main([*command, *size, "-q", "-o", str(smooth)]) == 0
+    assert main([*command, *size, "-q", "--msaa", "0", "-o", str(hard)]) == 0
+    a, b = read(smooth).astype(int), read(hard).astype(int)
+    assert a.shape == b.shape and (np.abs(a - b).sum(axis=2) > 30).sum() > 20     # the edges differ
+    assert main([*command, *size, "-q", "--msaa", "3", "-o", str(tmp_path / "bad.png")]) == 2
+    assert "--msaa must be one of 0, 2, 4, 8, 16, got 3" in capsys.readouterr().err
+    assert not (tmp_path / "bad.png").exists()

@@ -154,6 +154,11 @@ def add_render_arguments(p: argparse.ArgumentParser, view: str = "face") -> None
     g.add_argument("--size", type=int, default=512, help="frame width = height in pixels, a multiple of 16 "
                    "(default 512)")
     g.add_argument("--view", choices=VIEWS, default=view, help=f"camera (default {view})")
+    add_msaa_argument(g)
+
+
+def add_msaa_argument(g) -> None:
+    """``--msaa`` (checked by :func:`visemeface.pipeline.check_msaa`)."""
     g.add_argument("--msaa", type=int, default=4, metavar="N",
                    help="antialiasing samples per pixel: 0, 2, 4, 8 or 16 (default 4; 0 renders about twice as fast)")
 

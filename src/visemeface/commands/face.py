@@ -31,6 +31,7 @@ def register(subparsers) -> None:
                    help="camera preset (default: face)")
     p.add_argument("--size", default="512", metavar="N|WxH",
                    help="image size in pixels, multiples of 16 (default: 512)")
+    opt.add_msaa_argument(p)
     p.add_argument("--projection", default="perspective", choices=PROJECTIONS,
                    help="camera projection (default: perspective)")
     p.add_argument("--resolution", type=int, metavar="N",
@@ -93,6 +94,9 @@ def run(args) -> int:
     from visemeface.render.renderer import parse_size
 
     size = parse_size(args.size)
+    from visemeface.pipeline import check_msaa
+
+    check_msaa(args.msaa)
     outputs = [Path(p) for p in (args.output, args.camera_json) if p]
     if args.export:
         outputs += [Path(args.export), sidecar_path(args.export)]
@@ -121,7 +125,7 @@ def run(args) -> int:
               f"{len(face.tris)} triangles) and {side}")
     if args.output or args.camera_json:
         from visemeface.render.renderer import Renderer, save_png
-        with Renderer(face, size=size, view=args.view, projection=args.projection) as renderer:
+        with Renderer(face, size=size, view=args.view, projection=args.projection, samples=args.msaa) as renderer:
             if args.output:
                 save_png(args.output, renderer.render(), force=args.force)
                 say(f"wrote {args.output} ({size[0]}x{size[1]}, view {args.view}, {args.projection})")

@@ -34,6 +34,7 @@ def register(subparsers) -> None:
 
     p.add_argument("--view", default="face", choices=VIEWS, help="camera (default face)")
     p.add_argument("--size", default="512", metavar="W[xH]", help="image size in pixels, multiples of 16 (default 512)")
+    opt.add_msaa_argument(p)
     opt.add_face_arguments(p)
     p.add_argument("--show-muscles", action="store_true",
                    help="draw the muscles over the render: attachment -> insertion vectors (blue upper lip, "
@@ -91,6 +92,9 @@ def run(args) -> int:
     from visemeface.render.renderer import parse_size
 
     size = parse_size(args.size)
+    from visemeface.pipeline import check_msaa
+
+    check_msaa(args.msaa)
     sets = parse_assignments(args.sets, "--set")
     from visemeface.animate import parse_emotions
     from visemeface.commands._options import build_rig
@@ -100,7 +104,7 @@ def run(args) -> int:
     emotions = parse_emotions(args.emotions or None, load_expressions(rig=rig).index)
     a = activations(rig, args.posture, emotions, sets)
     vertices = rig.pose(a)
-    with Renderer(rig.face, size=size, view=args.view) as renderer:
+    with Renderer(rig.face, size=size, view=args.view, samples=args.msaa) as renderer:
         image = renderer.render(vertices)
         if args.show_muscles:
             from visemeface.muscles.overlay import draw_muscles

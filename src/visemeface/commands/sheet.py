@@ -35,6 +35,7 @@ def register(subparsers) -> None:
                    "(default 192)")
     p.add_argument("--view", choices=VIEWS, default=None,
                    help="camera: face, mouth or three-quarter (default: mouth for visemes, face for emotions)")
+    opt.add_msaa_argument(p)
     p.add_argument("--columns", type=int, default=None, help="tiles per row (default 8 for visemes, 4 for emotions)")
     opt.add_face_arguments(p)
     p.add_argument("--force", action="store_true", help="overwrite the output if it exists")
@@ -89,6 +90,9 @@ def run(args) -> int:
 
     if args.size < 16 or args.size % 16:
         raise InputError(f"--size must be a positive multiple of 16, got {args.size}")
+    from visemeface.pipeline import check_msaa
+
+    check_msaa(args.msaa)
     if args.columns is not None and args.columns < 1:
         raise InputError(f"--columns must be at least 1, got {args.columns}")
     if args.emotions and args.emotion:
@@ -116,7 +120,7 @@ def run(args) -> int:
     keep = bool(args.keep_contact)
     # fail on a bad name before rendering anything
     posed_vertices(rig, *poses[-1])
-    renderer = Renderer(rig.face, size=(args.size, args.size), view=view)
+    renderer = Renderer(rig.face, size=(args.size, args.size), view=view, samples=args.msaa)
     images = [renderer.render(posed_vertices(rig, v, e, keep_contact=keep))
               for v, e in progress(poses, desc="rendering", unit="posture", show=not args.quiet)]
     sheet = compose_sheet(images, labels, columns)
