@@ -37,9 +37,14 @@ def test_open_vowel_is_an_oval_not_a_slit_to_the_corners(shapes):
 
 @pytest.mark.parametrize("v", ["f", "v"])
 def test_labiodentals_put_the_lower_lip_on_the_upper_incisors(rig, shapes, v):
+    # the incisors rest on the lower lip: its top covers their edge (above it by at most the edge's depth
+    # below the rest seam, 2.5 mm) and lies just in front of it (touching: within 1 mm), so of the teeth
+    # only the upper incisors show, above the lower lip
     p = shapes[v][0]
     lm = rig.face.landmarks
-    assert np.linalg.norm(p[lm["lower_lip_mid"]] - p[lm["upper_incisor_edge"]]) <= 0.001
+    up = p[lm["lower_lip_mid"], 1] - p[lm["upper_incisor_edge"], 1]
+    ahead = p[lm["lower_lip_mid"], 2] - p[lm["upper_incisor_edge"], 2]
+    assert 0.0005 <= up <= 0.0025 and 0.0 <= ahead <= 0.001, (up, ahead)
 
 
 @pytest.mark.parametrize("v", ["th", "dh"])
