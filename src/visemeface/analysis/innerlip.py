@@ -15,13 +15,17 @@ absolute colour or lightness enters:
    width up and down (the mesh's inner contour is smooth and sits inside the
    visible opening, by up to 2-4 px on a 40 px GRID mouth), never beyond the
    outer lip contour shrunk by :data:`OUTER_SHRINK`: a moustache, a beard or
-   the nostrils lie outside the outer contour and are never looked at.
+   the nostrils lie outside the outer contour and are never looked at. Teeth or
+   a cavity may run on past the bound into a thin *halo* (:data:`HALO`) and end
+   there; what reaches the halo's edge over the middle of the mouth is hair or
+   skin, not an opening.
 3. *Reference*: the lips themselves, the pixels between the outer contour
    and the bound, the upper and the lower lip apart (one is often shaded):
    median CIE lightness :math:`\\tilde L_u, \\tilde L_l` and chroma
    :math:`\\tilde C_u, \\tilde C_l` (OpenCV's 8-bit Lab). A pixel of the bound
    above the inner contour's mid-line is compared with the upper lip, one
-   below it with the lower lip.
+   below it with the lower lip (with the lower lip where the upper is much less
+   coloured, :data:`SAME_LIP`: a moustache over it).
 4. *Evidence* (:func:`evidence`): a pixel is unlike lip when it is a dark
    cavity, :math:`L \\le \\rho_d \\tilde L`; a tooth, brighter
    :math:`L \\ge \\rho_b \\tilde L` or, when the lips have colour at all
@@ -58,6 +62,18 @@ BOUND_GROW = 0.08
 #: ... tapering (as an ellipse over the inner contour's width) to this fraction of it at the corners,
 #: where the lips meet and an opening is never as tall as at the centre.
 CORNER_GROW = 0.3
+
+#: Halo: teeth or a cavity may run past the bound by up to this fraction of the mouth width more (as the
+#: bound, tapering to the corners) and end there, enclosed by lip; unlike pixels that reach the halo's edge
+#: are hair or skin. At 0 (the bound's own edge) an /eh/ or /iy/ of swwp2s whose upper lip lifts off the
+#: teeth reads as closed (the teeth run past the bound). 0.02 is the smallest that reads every hand-labelled
+#: open frame of the three GRID clips as open.
+HALO = 0.02
+
+#: Reference: lips are one tissue, so an upper lip much less coloured than the lower (its chroma below this
+#: fraction of the lower's) has something over it -- a moustache -- and is compared with the lower lip's
+#: lightness and chroma instead. The GRID lips differ by at most 10 %; 0.7-0.9 read the same.
+SAME_LIP = 0.8
 
 #: Bound: the outer lip contour shrunk by this fraction of the mouth width (its own few-pixel error:
 #: the skin just outside the lips, a moustache's edge, is never opening).
@@ -178,7 +194,8 @@ def _lip_reference(light: np.ndarray, chroma: np.ndarray, mask: np.ndarray) -> t
 
 
 def openings_in(light, chroma, bound, upper, lower, mid_row, min_px: float, bridge_px: float,
-                outer_edge: np.ndarray | None = None, slits: bool = True) -> np.ndarray:
+                outer_edge: np.ndarray | None = None, slits: bool = True, halo: np.ndarray | None = None
+                ) -> np.ndarray:
     """0/1 uint8 opening mask inside ``bound`` given the upper/lower lip reference masks.
 
     ``mid_row`` ``(W,)`` is the row of the inner contour's mid-line in each column: pixels above it
@@ -193,17 +210,20 @@ def openings_in(light, chroma, bound, upper, lower, mid_row, min_px: float, brid
     up = upper if upper.sum() >= 8 else lips
     lo = lower if lower.sum() >= 8 else lips
     (lu, cu), (ll, cl) = _lip_reference(light, chroma, up), _lip_reference(light, chroma, lo)
+    if cu < SAME_LIP * cl:                  # something over the upper lip (a moustache): the lower lip's colour
+        lu, cu = ll, cl
     rows = np.arange(bound.shape[0])[:, None]
     above = rows < mid_row[None, :]
     ref_l = np.where(above, lu, ll).astype(np.float32)
     ref_c = np.where(above, cu, cl).astype(np.float32)
     dark, teeth = evidence(light, chroma, ref_l, ref_c)
+    around = bound if halo is None else halo | bound
+    # specks of noise: an opening pixel has unlike neighbours
+    k = np.ones((3, 3), np.uint8)
+    unlike = cv2.morphologyEx(((dark | teeth) & around).view(np.uint8), cv2.MORPH_OPEN, k)
     dark &= bound
     teeth &= bound
     deep = dark & (light <= DEEP_RATIO * ref_l)
-    # specks of noise: an opening pixel has unlike neighbours
-    k = np.ones((3, 3), np.uint8)
-    unlike = cv2.morphologyEx((dark | teeth).view(np.uint8), cv2.MORPH_OPEN, k)
     if slits:
         unlike |= (bound & (light <= BLACK_RATIO * ref_l)).view(np.uint8)
     # an opening is enclosed by lips: what is unlike lip where the bound meets the outer lip contour
@@ -213,7 +233,7 @@ def openings_in(light, chroma, bound, upper, lower, mid_row, min_px: float, brid
     if outer_edge is not None:
         touching[np.unique(lab_u[outer_edge & (unlike > 0)])] = True
     touching[0] = True
-    unlike = ~touching[lab_u]
+    unlike = ~touching[lab_u] & bound
     dark &= unlike
     teeth &= unlike
     deep &= unlike
@@ -301,11 +321,14 @@ def mesh_opening_mask(crop: np.ndarray, box_in_crop, lips_in_crop: np.ndarray | 
         lo_row, hi_row = np.minimum(top, bot) - grow, np.maximum(top, bot) + grow
         band = (rows >= lo_row[None, :]) & (rows <= hi_row[None, :]) & inside_x[None, :]
         bound = band & o_in
-        # the bound's top and bottom edge over the middle of the mouth (at the corners the contours
+        # the halo, and its top and bottom edge over the middle of the mouth (at the corners the contours
         # meet and the shaded corner of an opening reaches them)
-        b8 = bound.view(np.uint8)
+        more = HALO * wpx * np.maximum(np.sqrt(1 - u * u), CORNER_GROW)
+        halo = ((rows >= (lo_row - more)[None, :]) & (rows <= (hi_row + more)[None, :]) & inside_x[None, :]
+                & o_in)
+        b8 = halo.view(np.uint8)
         inner_rows = np.vstack([b8[1:], np.zeros_like(b8[:1])]) & np.vstack([np.zeros_like(b8[:1]), b8[:-1]])
-        outer_edge = bound & ~inner_rows.view(bool) & (u <= EDGE_SPAN)[None, :]
+        outer_edge = halo & ~inner_rows.view(bool) & (u <= EDGE_SPAN)[None, :]
         # the lips' own colour away from their outer edge (a moustache or the mesh's error overlaps it)
         core = max(1, int(round(REF_SHRINK * wpx)))
         ref = cv2.erode(o_mask.view(np.uint8), np.ones((2 * core + 1, 2 * core + 1), np.uint8)).view(bool) & ~band
@@ -320,7 +343,7 @@ def mesh_opening_mask(crop: np.ndarray, box_in_crop, lips_in_crop: np.ndarray | 
         bound = enclosed_mask(lips)
         bound = plausible_openings(bound.view(np.uint8), bx, 0.5 * min_height * wpx).view(bool)
         ref = lips
-        outer_edge = None
+        outer_edge = halo = None
         cols = np.flatnonzero(bound.any(axis=0))
         rows = np.arange(shape[0])[:, None]
         top = np.where(bound, rows, shape[0]).min(axis=0)
@@ -336,7 +359,7 @@ def mesh_opening_mask(crop: np.ndarray, box_in_crop, lips_in_crop: np.ndarray | 
     if not ref.any():
         return np.zeros(shape, np.uint8), None, s
     mask = openings_in(light, chroma, bound, upper, lower, mid_row, min_height * wpx, BRIDGE * wpx, outer_edge,
-                       slits=s == 1.0)
+                       slits=s == 1.0, halo=halo)
     return mask * np.uint8(255), float(np.median(light[ref])), s
 
 
