@@ -226,8 +226,8 @@ def openings_in(light, chroma, bound, upper, lower, mid_row, min_px: float, brid
     deep = dark & (light <= DEEP_RATIO * ref_l)
     if slits:
         unlike |= (bound & (light <= BLACK_RATIO * ref_l)).view(np.uint8)
-    # an opening is enclosed by lips: what is unlike lip where the bound meets the outer lip contour
-    # (a moustache, a beard, the skin beyond a contour drawn too wide) is not part of it
+    # an opening is enclosed by lips: what is unlike lip where the halo (or the bound) meets the outer lip
+    # contour (a moustache, a beard, the skin beyond a contour drawn too wide) is not part of it
     n_u, lab_u = cv2.connectedComponents(unlike, connectivity=8)
     touching = np.zeros(n_u, bool)
     if outer_edge is not None:
@@ -315,17 +315,21 @@ def mesh_opening_mask(crop: np.ndarray, box_in_crop, lips_in_crop: np.ndarray | 
         x0, x1 = inner[:, 0].min(), inner[:, 0].max()
         half = max(1.0, (x1 - x0) / 2)
         u = np.clip(np.abs(cols - (x0 + x1) / 2) / half, 0, 1)
-        grow = BOUND_GROW * wpx * np.maximum(np.sqrt(1 - u * u), CORNER_GROW)
+        taper = wpx * np.maximum(np.sqrt(1 - u * u), CORNER_GROW)
         inside_x = (cols >= x0 - OUTER_SHRINK * wpx) & (cols <= x1 + OUTER_SHRINK * wpx)
         rows = np.arange(shape[0], dtype=float)[:, None]
-        lo_row, hi_row = np.minimum(top, bot) - grow, np.maximum(top, bot) + grow
-        band = (rows >= lo_row[None, :]) & (rows <= hi_row[None, :]) & inside_x[None, :]
+
+        def grown(by: float) -> np.ndarray:
+            """The inner contour grown up and down by ``by`` of the mouth width (tapered to the corners)."""
+            g = by * taper
+            return ((rows >= (np.minimum(top, bot) - g)[None, :]) & (rows <= (np.maximum(top, bot) + g)[None, :])
+                    & inside_x[None, :])
+
+        band = grown(BOUND_GROW)
         bound = band & o_in
         # the halo, and its top and bottom edge over the middle of the mouth (at the corners the contours
         # meet and the shaded corner of an opening reaches them)
-        more = HALO * wpx * np.maximum(np.sqrt(1 - u * u), CORNER_GROW)
-        halo = ((rows >= (lo_row - more)[None, :]) & (rows <= (hi_row + more)[None, :]) & inside_x[None, :]
-                & o_in)
+        halo = grown(BOUND_GROW + HALO) & o_in
         b8 = halo.view(np.uint8)
         inner_rows = np.vstack([b8[1:], np.zeros_like(b8[:1])]) & np.vstack([np.zeros_like(b8[:1]), b8[:-1]])
         outer_edge = halo & ~inner_rows.view(bool) & (u <= EDGE_SPAN)[None, :]
