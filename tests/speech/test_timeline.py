@@ -163,6 +163,16 @@ def test_property_track_is_finite_bounded_and_closes(phones, mode, fps):
             assert (track["closure"][inside] == 1.0).any()
 
 
+@pytest.mark.parametrize("mode", MODES)
+def test_a_long_labiodental_after_a_short_pause_does_not_reopen_the_closure_before_it(mode):
+    # /p/ 1.5 frames long, a 1.5-frame pause, a long /f/: the /f/'s ramp (half its length) reaches back over
+    # the pause into the /p/'s one exact frame, which must stay shut
+    seg = pd.DataFrame({"start": [0.0, 0.0625, 0.125], "end": [0.0625, 0.125, 0.5], "phoneme": ["p", "_", "f"]})
+    track = activation_track(seg, toy_visemes(), fps=24, mode=mode)
+    assert (track["closure"].loc[0.0:0.0625] == 1.0).any()
+    assert (track["contact"].loc[0.125:0.5] == 1.0).any()
+
+
 def expressions():
     table = toy_visemes().select_dtypes("number")
     expr = pd.DataFrame(0.0, index=["happiness", "anger", "surprise"], columns=table.columns)

@@ -210,6 +210,7 @@ def _force_contacts(values, times, start, end, phones, targets, fps, edge):
     n = len(phones)
     forced = [p in FORCED for p in phones]
     strength = np.zeros(times.size)
+    held_by = np.full(times.size, -1)          # the segment whose exact target a frame shows (-1: none)
     dur = end - start
     hold = np.maximum.reduce([_held_half_width(start, end, edge), dur / 4,
                               np.full(n, 0.5 * frame * (1 + 1e-9))])
@@ -239,8 +240,13 @@ def _force_contacts(values, times, start, end, phones, targets, fps, edge):
         d = np.abs(rel)
         u = np.clip((d - hold_t) / np.where(ramp_t > 0, ramp_t, 1.0), 0.0, 1.0)
         w = np.where(d <= hold_t, 1.0, np.where(ramp_t > 0, 1.0 - cosine_step(u), 0.0))
+        # a frame showing another segment's exact target keeps it (a long /f/'s ramp does not reopen the
+        # /p/ before it), unless that segment is the one just before, which this one cross-fades from
+        held = held_by[lo:hi]
+        w = np.where((held >= 0) & ~((held == s - 1) & prev_forced), 0.0, w)
         values[lo:hi] = values[lo:hi] * (1 - w)[:, None] + targets[s][None, :] * w[:, None]
         strength[lo:hi] = np.maximum(strength[lo:hi], w)
+        held_by[lo:hi] = np.where(w == 1.0, s, held)
     return values, strength
 
 
