@@ -102,15 +102,18 @@ def check_new(path: str | Path, force: bool = False, folder: bool | None = None,
 def _probe(path: Path) -> None:
     """Create and remove the temporary ``path`` would be staged in: access() says yes to root everywhere,
     and some folders take no new file at all (``/proc``), which was found only after the work."""
+    from visemeface.runtime import signals_deferred
+
     probe = _temporary_name(path).with_name(_temporary_name(path).name + "probe")
-    try:
-        fd = os.open(probe, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600)
-    except FileExistsError:
-        return
-    except OSError as exc:
-        raise InputError(f"cannot write in the output folder ({exc.strerror})", path.parent) from None
-    os.close(fd)
-    os.unlink(probe)
+    with signals_deferred():                # an interrupt between the create and the remove left the probe
+        try:
+            fd = os.open(probe, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600)
+        except FileExistsError:
+            return
+        except OSError as exc:
+            raise InputError(f"cannot write in the output folder ({exc.strerror})", path.parent) from None
+        os.close(fd)
+        os.unlink(probe)
 
 
 def check_not_inputs(targets, inputs, what: str = "an input") -> None:
