@@ -53,6 +53,7 @@ import cv2
 import numpy as np
 
 from visemeface.analysis.lips import _odd, enclosed_mask, lip_mask, plausible_openings, work_scale
+from visemeface.numeric import quantile
 
 #: Bound: the inner-lip polygon grown up and down by this fraction of the mouth width. Tuned on
 #: swwp2s and bbaf2n (../shared/realdata): the hand-read opening reaches up to 0.1 w beyond the
@@ -189,8 +190,8 @@ def _lip_reference(light: np.ndarray, chroma: np.ndarray, mask: np.ndarray) -> t
     """Median lightness and chroma of the lip pixels in ``mask``, hair and shadow left out: pixels
     darker than :data:`HAIR_RATIO` x the 90th percentile of their lightness do not count."""
     sel = light[mask]
-    keep = sel >= HAIR_RATIO * np.percentile(sel, 90)
-    return float(np.median(sel[keep])), float(np.median(chroma[mask][keep]))
+    keep = sel >= HAIR_RATIO * quantile(sel, 0.9)
+    return quantile(sel[keep], 0.5), quantile(chroma[mask][keep], 0.5)
 
 
 def openings_in(light, chroma, bound, upper, lower, mid_row, min_px: float, bridge_px: float,
@@ -253,7 +254,7 @@ def openings_in(light, chroma, bound, upper, lower, mid_row, min_px: float, brid
         win = np.s_[y:y + h, x:x + w]
         region = labels[win] == i
         tooth = teeth[win] & region
-        depth = float(np.percentile((deep[win] & region).sum(axis=0), DEPTH_PERCENTILE))
+        depth = quantile((deep[win] & region).sum(axis=0), DEPTH_PERCENTILE / 100)
         lw = light[win]
         black = slits and int(((lw <= BLACK_RATIO * ref_l[win]) & region).sum()) >= BLACK_AREA * wpx * wpx
         if tooth.sum() < TEETH_AREA * wpx * wpx and depth < DEEP_THICK * wpx and not black:
@@ -268,7 +269,7 @@ def openings_in(light, chroma, bound, upper, lower, mid_row, min_px: float, brid
             through[cols[0]:cols[-1] + 1] = True
             edge = gap | (tooth & through[None, :])
         else:
-            floor = float(np.percentile(lw[region], 5))
+            floor = quantile(lw[region], 0.05)
             edge = region & ((lw <= floor + EDGE * (ref_l[win] - floor)) | tooth)
         r = rows[y:y + h]
         top = np.where(edge, r, big).min(axis=0)
@@ -364,7 +365,7 @@ def mesh_opening_mask(crop: np.ndarray, box_in_crop, lips_in_crop: np.ndarray | 
         return np.zeros(shape, np.uint8), None, s
     mask = openings_in(light, chroma, bound, upper, lower, mid_row, min_height * wpx, BRIDGE * wpx, outer_edge,
                        slits=s == 1.0, halo=halo)
-    return mask * np.uint8(255), float(np.median(light[ref])), s
+    return mask * np.uint8(255), quantile(light[ref], 0.5), s
 
 
 def _curve(pts: np.ndarray, cols: np.ndarray) -> np.ndarray:

@@ -41,6 +41,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from visemeface.numeric import quantile
+
 #: The mouth is resampled to at least this width (px) before segmentation.
 WORK_WIDTH = 120
 
@@ -209,5 +211,5 @@ def plausible_openings(opening: np.ndarray, box, min_px: float) -> np.ndarray:
     keep[0] = False
     for i in np.flatnonzero(keep):
         cols = (labels[y[i]:y[i] + h[i], x[i]:x[i] + w[i]] == i).sum(axis=0)
-        keep[i] = np.percentile(cols[cols > 0], 90) >= min_px
+        keep[i] = quantile(cols[cols > 0], 0.9) >= min_px
     return keep[labels].view(np.uint8)
