@@ -11,6 +11,8 @@ Prints JSON lines, one section after another (``--only`` runs some):
     frame). ``--out DIR`` writes ``prosody_realdata.png``: real, before and after heights overlaid.
     ``oracle`` is the same r when each phone's JA factor is the real speaker's own opening over ours, phone by
     phone (a bound on what per-phone JA factors can reach with these visemes and this alignment; not a method).
+    ``best_lag_frames_after`` and ``r_after_at_best_lag``: the lag (frames within +-5, positive where the real
+    mouth leads ours) at which ``after`` correlates best, and r there (a timing error shows as a lag).
 ``stress``
     "I never said she stole my money" with one word emphasised each time (``*word*``), no recording: the
     mean jaw activation and rendered opening height over each word's vowels, and how much more the emphasised
@@ -87,6 +89,8 @@ def realdata(folder: Path, out: Path | None) -> None:
                           "speech_s": r["before"]["span_s"],
                           "r_before": round(r["before"]["r"], 3), "r_after": round(r["after"]["r"], 3),
                           "r_oracle_ja": round(r["oracle"]["r"], 3),
+                          "best_lag_frames_after": r["after"]["lag"],
+                          "r_after_at_best_lag": round(r["after"]["r_lag"], 3),
                           "ja_range": [round(float(ja.min()), 2), round(float(ja.max()), 2)],
                           "li_range": [round(float(li.min()), 2), round(float(li.max()), 2)],
                           "bilabial_closure_frames_before": cb, "after": ca, "shift_frames": shifts,
