@@ -29,7 +29,7 @@ def sphere_fit(points) -> tuple[np.ndarray, float]:
     """The least-squares sphere through ``points`` (n, 3): (centre, radius).
 
     >>> c, r = sphere_fit([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0, -1]])
-    >>> c.round(12).tolist(), round(r, 12)
+    >>> (c.round(12) + 0.0).tolist(), round(r, 12)
     ([0.0, 0.0, 0.0], 1.0)
     """
     P = np.asarray(points, dtype=np.float64)
