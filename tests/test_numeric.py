@@ -22,3 +22,12 @@ def test_quantile_leaves_its_input_unsorted_and_refuses_nothing_to_measure():
     assert a.tolist() == [3.0, 1.0, 2.0]
     with pytest.raises(ValueError, match="empty"):
         quantile(np.zeros(0), 0.5)
+
+
+def test_the_examples_in_the_docstrings_hold():
+    import doctest
+
+    import visemeface.numeric
+
+    result = doctest.testmod(visemeface.numeric)
+    assert result.attempted >= 4 and result.failed == 0
