@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import errno
 import os
 import re
 import shutil
@@ -111,7 +112,9 @@ def _probe(path: Path) -> None:
         except FileExistsError:
             return
         except OSError as exc:
-            raise InputError(f"cannot write in the output folder ({exc.strerror})", path.parent) from None
+            # the folder exists (checked above), so "no such file" means it takes no new files (/proc, /sys)
+            why = "it takes no new files" if exc.errno == errno.ENOENT else exc.strerror
+            raise InputError(f"cannot write in the output folder ({why})", path.parent) from None
         os.close(fd)
         os.unlink(probe)
 
