@@ -69,7 +69,7 @@ def test_analyze_frame_folder_with_plot_and_overlay(tmp_path, capsys, frame_dir)
 
 def test_analyze_mp4_with_sidecar(tmp_path, capsys, video):
     csv = tmp_path / "m.csv"
-    code, out, err = _run(capsys, "analyze", video, "-o", csv, "--hull", "--teeth")
+    code, out, err = _run(capsys, "analyze", video, "-o", csv, "--hull")
     assert code == 0, err
     _assert_merge(pd.read_csv(csv), 25)                  # fps from the video, box from take.mp4.json
     assert "25 fps" in out
@@ -82,7 +82,8 @@ def test_output_is_deterministic_and_needs_force(tmp_path, capsys, frame_dir):
     assert a.read_bytes() == b.read_bytes()
     code, _, err = _run(capsys, "analyze", frame_dir, "--box", BOX, "-o", a)
     assert code == 2 and "exists" in err
-    assert _run(capsys, "analyze", frame_dir, "--box", BOX, "-o", a, "--force", "--threshold", "70")[0] == 0
+    assert _run(capsys, "analyze", frame_dir, "--box", BOX, "-o", a, "--force", "--method", "seed", "--teeth",
+                "--threshold", "70")[0] == 0
 
 
 def test_compare_prints_l2_and_plots(tmp_path, capsys, frame_dir, video):
@@ -106,6 +107,17 @@ def _error(capsys, *argv):
     assert code == 2
     assert err.startswith("visemeface: error: ") and err.count("\n") == 1
     return err
+
+
+@pytest.mark.parametrize("method,option", [("mesh", ["--threshold", "70"]), ("mesh", ["--teeth"]),
+                                           ("lips", ["--teeth"]), ("seed", ["--min-height", "0.1"])])
+def test_an_option_the_method_does_not_read_is_refused(tmp_path, capsys, frame_dir, method, option):
+    """Given to a method that ignores it, an option would leave the CSV as it was while the user believes it
+    changed the measure: it is refused in one line, naming the methods that read it, and nothing is written."""
+    out = tmp_path / "x.csv"
+    err = _error(capsys, "analyze", frame_dir, "--box", BOX, "-o", out, "--method", method, *option)
+    assert option[0] in err and "applies to --method" in err and method in err
+    assert not out.exists()
 
 
 def test_bad_inputs_exit_2_with_one_line(tmp_path, capsys, frame_dir):

@@ -60,3 +60,14 @@ def test_every_command_takes_help_all_and_lists_every_option(command, capsys):
     assert exc.value.code == 0
     parser = _subparsers()[command]
     assert _listed(capsys.readouterr().out) >= {a.option_strings[0] for a in parser._actions if a.option_strings}
+
+
+@pytest.mark.parametrize("command", sorted(BASIC_OPTIONS))
+def test_the_examples_in_help_use_only_the_options_it_shows(command, capsys):
+    """A user copies an example from ``--help`` and looks its options up on the same page."""
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    short = capsys.readouterr().out
+    examples = short.split("examples:", 1)[1].split("\n\n", 1)[0] if "examples:" in short else ""
+    used = {o for line in examples.splitlines() for o in re.findall(r"(?<![\w-])(--?[a-z][a-z0-9-]*)", line.split("#")[0])}
+    assert used <= _listed(short), sorted(used - _listed(short))

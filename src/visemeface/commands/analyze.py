@@ -96,16 +96,17 @@ def register(subparsers) -> None:
                    "lip colour (without a face mesh -- a given box, a close-up -- between the lips found by colour); "
                    "'lips': the region enclosed between the lips segmented by colour (redder than skin), teeth and "
                    "tongue included; 'seed': Leach & Maddock's (2019) dark threshold")
-    p.add_argument("--threshold", default="otsu", metavar="N|otsu",
-                   help="seed: grey level 0-255 at or below which a pixel is mouth opening, or 'otsu' (default); "
-                   "lips: a grey level at or below which a pixel is never lip (default: relative to the lips)")
+    p.add_argument("--threshold", metavar="N|otsu",
+                   help="seed and lips methods only: seed: grey level 0-255 at or below which a pixel is mouth "
+                   "opening, or 'otsu' (default); lips: a grey level at or below which a pixel is never lip "
+                   "(default: relative to the lips)")
     p.add_argument("--hull", action="store_true", help="use each opening's convex hull (bright reflections)")
     p.add_argument("--teeth", action="store_true",
-                   help="seed method: count bright unsaturated pixels (teeth) touching the opening as opening "
-                   "(the lips method always counts teeth between the lips)")
-    p.add_argument("--min-height", type=opt.number(0, 1, high_open=True), default=0.05, metavar="F",
-                   help="lips method: an opening nowhere F * mouth_width thick is the seam of closed lips, "
-                   "one less than that wide a speck (default 0.05)")
+                   help="seed method only: count bright unsaturated pixels (teeth) touching the opening as "
+                   "opening (the mesh and lips methods always count teeth between the lips)")
+    p.add_argument("--min-height", type=opt.number(0, 1, high_open=True), metavar="F",
+                   help="mesh and lips methods only: an opening nowhere F * mouth_width thick is the seam of "
+                   "closed lips, one less than that wide a speck (default 0.05)")
     p.add_argument("--min-area", type=opt.number(0, 1, high_open=True), default=5e-4, metavar="F",
                    help="drop openings smaller than F * mouth_width^2 pixels (default 5e-4)")
     p.add_argument("--pad", default="0.1,0.1,0.1,0.4", metavar="F|L,T,R,B",
@@ -121,7 +122,7 @@ def register(subparsers) -> None:
 def _threshold(text: str):
     from visemeface.errors import InputError
 
-    if text.strip().lower() == "otsu":
+    if text is None or text.strip().lower() == "otsu":
         return "otsu"
     try:
         return opt.check_number(text, "--threshold", 0, 255, what="a grey level, or 'otsu'")
@@ -136,6 +137,22 @@ def _pad(text: str):
     if len(vals) not in (1, 4):
         raise InputError(f"--pad must be 1 or 4 numbers (left,top,right,bottom), got {opt.shown(text)}")
     return tuple(opt.check_number(v, "--pad", 0, MAX_PAD, what="mouth widths") for v in vals)
+
+
+#: The options that only some methods read, and those methods.
+METHOD_OPTIONS = {"threshold": ("seed", "lips"), "teeth": ("seed",), "min_height": ("mesh", "lips")}
+
+
+def _check_applies(args) -> None:
+    """An option the chosen method does not read is refused (a user would otherwise believe it changed
+    the measure)."""
+    from visemeface.errors import InputError
+
+    for dest, methods in METHOD_OPTIONS.items():
+        if getattr(args, dest) not in (None, False) and args.method not in methods:
+            flag = "--" + dest.replace("_", "-")
+            raise InputError(f"{flag} applies to --method {' or '.join(methods)}, not to {args.method} "
+                             "(it would change nothing)")
 
 
 def run(args) -> int:
@@ -153,7 +170,8 @@ def run(args) -> int:
 
     detector = OpeningDetector(threshold=_threshold(args.threshold), hull=args.hull, teeth=args.teeth,
                                min_area=args.min_area, pad=_pad(args.pad), method=args.method,
-                               min_height=args.min_height)
+                               min_height=0.05 if args.min_height is None else args.min_height)
+    _check_applies(args)
     if not Path(args.input).exists():
         raise InputError("no such file or folder", args.input)
     # --box wins; a sidecar found next to the input is only read when no box is given

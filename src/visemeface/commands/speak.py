@@ -18,7 +18,7 @@ EPILOG = """\
 examples:
   visemeface speak one_five_zero_zero_six.txt                     # -> one_five_zero_zero_six.mp4
   visemeface speak a.TextGrid --audio a.wav --emotion happiness=0.6 -o a.mp4
-  visemeface speak a.lab --no-video --gltf a.glb --pc2 a.pc2 --track a.csv
+  visemeface speak a.lab --no-video --gltf a.glb --arkit a.csv --rhubarb a.tsv
   visemeface speak a.txt --frames a_frames          # PNG frames too; after Ctrl-C:
   visemeface speak a.txt --frames a_frames --resume   # keeps the finished frames
   visemeface speak a.txt --face my_head.obj -o mine.mp4   # any mesh with a .landmarks.json
