@@ -24,6 +24,13 @@ def pytest_configure(config):
     from visemeface.runtime import configure
 
     configure()  # as the CLI does: numba's threading layer, OpenMP spin, cache folder
+    # A run started in the background by a non-interactive shell (`cmd &`, nohup) inherits SIGINT ignored, and
+    # Python then installs no KeyboardInterrupt for it; the tests of what Ctrl-C does need Python's own handler
+    # (and the commands they start inherit the default action).
+    import signal
+
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     config.addinivalue_line("markers", "slow: FEM simulations, whole-utterance renders and real-video runs "
                             "(deselect with -m 'not slow')")
     config.addinivalue_line("markers", "realdata: needs ../shared/realdata (skipped where absent)")

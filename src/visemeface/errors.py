@@ -133,7 +133,8 @@ def close_matches(name: str, known: Iterable[str], n: int = 3) -> str:
     """Return a hint like ``" (did you mean: a, b?)"`` or ``""``."""
     import difflib
 
-    matches = difflib.get_close_matches(name, list(known), n=n, cutoff=0.5)
+    # a name of another type (a landmark asked for by number) gets no hint, not a TypeError
+    matches = difflib.get_close_matches(str(name), [str(k) for k in known], n=n, cutoff=0.5)
     return f" (did you mean: {', '.join(matches)}?)" if matches else ""
 
 

@@ -460,3 +460,13 @@ def test_a_modiolus_table_is_checked_naming_its_field(tmp_path):
         path = _write(tmp_path, text.replace("version = 1\n", f"version = 1\n\n[modiolus]\n{table}\n", 1))
         with pytest.raises(InputError, match=message):
             MuscleRig.from_file(default_rig().face, path)
+
+
+def test_a_landmark_asked_for_by_number_is_an_input_error():
+    """Landmarks are named; a number (a Multi-PIE index) is refused as an unknown landmark, with the
+    named ones suggested where one is close, not with a TypeError from the suggestion."""
+    face = default_rig().face
+    with pytest.raises(InputError, match="unknown landmark 48"):
+        face.landmark_position(48)
+    with pytest.raises(InputError, match="did you mean: chin"):
+        face.landmark_position("chinn")
