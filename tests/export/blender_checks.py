@@ -1,4 +1,4 @@
-"""Run inside Blender: ``blender -b --factory-startup --python blender_checks.py -- GLB OBJ_DIR PC2 OUT.json``.
+"""Run inside Blender: ``blender -b --factory-startup --python blender_checks.py -- GLB OBJ_DIR PC2 HEAD_GLB OUT.json``.
 
 Checks what the README tells Blender users to do, and writes what it found as JSON (read by
 test_clients.py):
@@ -7,7 +7,9 @@ test_clients.py):
   glTF 2.0): the shape-key names and the frames of the shape-key action's keys;
 - PC2: import ``frame_000000.obj`` (File > Import > Wavefront OBJ, default axes), add a Mesh Cache
   modifier (PC2, axes left at their defaults) and compare the evaluated mesh at several frames with
-  the OBJ of that frame imported the same way (world coordinates): the largest distance (mm).
+  the OBJ of that frame imported the same way (world coordinates): the largest distance (mm);
+- a glb spoken from a recording (head gestures on): the object the face mesh hangs from and its world
+  rotation (w, x, y, z, Blender's axes) at every frame, as the importer animates it.
 """
 
 import json
@@ -25,7 +27,7 @@ try:  # Blender 3.4's glTF importer uses np.bool, gone since numpy 1.24 (Debian 
 except ImportError:
     pass
 
-glb, obj_dir, pc2, out = (Path(a) for a in sys.argv[sys.argv.index("--") + 1:])
+glb, obj_dir, pc2, head_glb, out = (Path(a) for a in sys.argv[sys.argv.index("--") + 1:])
 result = {"blender": bpy.app.version_string}
 
 
@@ -54,14 +56,30 @@ def import_obj(path):
     return next(iter(set(bpy.data.objects) - before))
 
 
-clear()
-data = glb.read_bytes()
-n = struct.unpack_from("<I", data, 12)[0]
-doc = json.loads(data[20:20 + n])
-fps = doc["asset"]["extras"]["fps"]
-bpy.context.scene.render.fps = int(round(fps))
-bpy.context.scene.render.fps_base = round(fps) / fps
-bpy.ops.import_scene.gltf(filepath=str(glb))
+def import_glb(path):
+    """Import as the README says: the scene's frame rate set to the glb's first; its ``asset.extras``."""
+    clear()
+    data = path.read_bytes()
+    n = struct.unpack_from("<I", data, 12)[0]
+    extras = json.loads(data[20:20 + n])["asset"]["extras"]
+    fps = extras["fps"]
+    bpy.context.scene.render.fps = int(round(fps))
+    bpy.context.scene.render.fps_base = round(fps) / fps
+    bpy.ops.import_scene.gltf(filepath=str(path))
+    return extras
+
+
+head_extras = import_glb(head_glb)
+face = next(o for o in bpy.data.objects if o.type == "MESH")
+result["face_parent"] = face.parent.name if face.parent else None
+rotations = []
+for k in range(head_extras["frames"]):
+    bpy.context.scene.frame_set(k)
+    q = face.parent.matrix_world.to_quaternion() if face.parent else None
+    rotations.append(None if q is None else [q.w, q.x, q.y, q.z])
+result["head_rotations"] = rotations
+
+import_glb(glb)
 mesh = next(o for o in bpy.data.objects if o.type == "MESH")
 keys = mesh.data.shape_keys
 result["shape_keys"] = [k.name for k in keys.key_blocks]
