@@ -250,3 +250,28 @@ def test_a_manifest_gives_each_clip_an_identity_of_the_ict_head(tmp_path):
 
     a, b = _rig("ict", None, None, "1"), _rig("ict", None, None, "2")
     assert np.abs(a.face.vertices - b.face.vertices).max() > 2e-3
+
+
+@pytest.mark.parametrize("face_name", ["procedural", "ict"])
+def test_a_raised_brow_gathers_the_whole_forehead_not_a_band_under_the_hairline(face_name):
+    """The frontalis is a sheet of parallel fibres: in surprise the forehead shortens evenly from the hairline
+    to the brows. Modelled as Waters' fan (a cone from a point under the hairline, its pull faded in from the
+    attachment) the shortening crowded into a band there: the skin compressed by 0.41-0.45 (p99 over the
+    upper face; blotches in the fold shade), where evenly it is 0.18-0.19, while the brows rise as much."""
+    from visemeface.muscles.rig import MuscleRig
+    from visemeface.postures.library import posed_vertices
+
+    face = builtin_face(face_name)
+    rig = MuscleRig.from_file(face)
+    lengths = np.empty(face.n_vertices)
+    acc = face.normal_accumulator()
+    acc(face.vertices, lengths=lengths)
+    rest = lengths.copy()
+    v = posed_vertices(rig, "_", {"surprise": 1.0})
+    acc(v, lengths=lengths)
+    moved = np.linalg.norm(v - face.vertices, axis=1)
+    upper = (face.vertices[:, 1] > np.percentile(face.vertices[:, 1], 75)) & (moved > 5e-4) & (rest > 0)
+    compression = 1 - lengths[upper] / rest[upper]
+    assert np.percentile(compression, 99) < 0.25
+    brows = [face.landmarks[f"brow_{p}_{s}"] for p in ("inner", "outer") for s in ("left", "right")]
+    assert (v[brows, 1] - face.vertices[brows, 1]).min() > 5e-3        # the brows still rise

@@ -242,3 +242,39 @@ def test_a_closing_push_is_sized_by_the_gap_it_closes():
     assert np.all(s[82:] == 1.0)
     # no push, or no target: nothing changes
     assert np.all(closing_scale(points, np.zeros_like(field), np.arange(82, 123), np.eye(3)) == 1.0)
+
+
+def test_a_sheet_of_parallel_fibres_shortens_evenly_and_falls_off_across_it():
+    """The frontalis as a sheet: along the fibres the pull grows linearly from the attachment (every equal
+    stretch of skin shortens by the same amount), none at or behind the attachment and none from Waters'
+    R_f on; across the sheet it falls off symmetrically to 0 at the fan's half width at the insertion."""
+    from visemeface.muscles.sheet import parallel_muscle_displacement
+
+    A, I = np.array([0.0, 0.06, 0.0]), np.array([0.0, 0.0, 0.0])      # fibres run down to the brow
+    s = np.linspace(-0.01, 0.09, 101)
+    line = np.column_stack([np.zeros_like(s), 0.06 - s, np.zeros_like(s)])
+    d = parallel_muscle_displacement(line, A, I, np.radians(30), 0.09, k=0.01)
+    assert np.allclose(d[:, [0, 2]], 0) and (d[:, 1] >= 0).all()       # pulled up, toward the attachment
+    pull = d[:, 1]
+    on = (s >= 0) & (s <= 0.06)
+    strain = np.diff(pull[on]) / np.diff(s[on])
+    assert np.allclose(strain, 0.01 / 0.06, rtol=1e-9)                  # even: k / L everywhere on the fibres
+    assert pull[s <= 0].max() == 0 and pull[s >= 0.09].max() < 1e-12
+    assert np.all(np.diff(pull[s >= 0.06]) <= 1e-15)                    # past the insertion it only falls
+    w = 0.06 * np.tan(np.radians(30))
+    x = np.linspace(-1.2 * w, 1.2 * w, 49)
+    row = np.column_stack([x, np.full_like(x, 0.01), np.zeros_like(x)])
+    across = parallel_muscle_displacement(row, A, I, np.radians(30), 0.09, k=0.01)[:, 1]
+    assert np.allclose(across, across[::-1]) and across[24] == across.max()
+    assert across[np.abs(x) >= w].max() < 1e-12
+    with pytest.raises(ValueError, match="past the insertion"):
+        parallel_muscle_displacement(row, A, I, np.radians(30), 0.05)
+
+
+@pytest.mark.parametrize("module", ["visemeface.muscles.functions", "visemeface.muscles.sheet"])
+def test_docstring_examples_run(module):
+    import doctest
+    import importlib
+
+    result = doctest.testmod(importlib.import_module(module))
+    assert result.attempted > 0 and result.failed == 0

@@ -269,6 +269,17 @@ def test_rig_file_errors_name_file_entry_field(tmp_path, old, new, field):
     assert f"{path}:" in msg
 
 
+def test_a_sheet_muscle_that_cannot_be_one_is_refused_naming_the_field(tmp_path):
+    text = _default_text()
+    assert text.count('fibres = "parallel"') == 2
+    i = text.index('name = "frontalis_medialis"')
+    short = text[:i] + text[i:].replace("falloff_start = 1.0\nfalloff_end = 1.35", "falloff_start = 0.5\nfalloff_end = 0.9", 1)
+    for t, why in ((text.replace('fibres = "parallel"', 'fibres = "paralel"', 1), "expected 'fan' or 'parallel'"),
+                   (short, "falloff_end past the insertion")):
+        with pytest.raises(InputError, match=f"'frontalis_medialis'.*'fibres'.*{why}"):
+            MuscleRig.from_file(default_rig().face, _write(tmp_path, t))
+
+
 def test_a_gaze_whose_lids_follow_from_nowhere_is_refused_naming_the_field(tmp_path):
     text = _default_text()
     assert "lid_radius = 0.3" in text

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from visemeface.muscles import functions as mf
+from visemeface.muscles.sheet import parallel_muscle_displacement
 
 
 @dataclass
@@ -70,6 +71,10 @@ class Muscle:
             if self.close_to is not None and len(self.close_to):
                 out = out * mf.closing_scale(points, out, self.close_to, frame.axes, self.overlap)[:, None]
             return out
+        if self.kind == "linear" and self.params.get("fibres") == "parallel":
+            # a sheet (the frontalis): the skin shortens evenly from the attachment, so no attachment fade
+            return parallel_muscle_displacement(points, self.attachment, self.insertion, self.zone_angle,
+                                                self.falloff_end, self.k)
         if self.kind == "linear":
             d = mf.linear_muscle_displacement(points, self.attachment, self.insertion, self.zone_angle,
                                               self.falloff_start, self.falloff_end, self.k)

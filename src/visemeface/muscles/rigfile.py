@@ -208,6 +208,12 @@ def muscles_from(reader: _RigFileReader) -> list:
                 if not 0 < rs < rf:
                     raise reader.error(base, "falloff_end", f"need 0 < falloff_start < falloff_end, got {rs}, {rf}")
                 m.falloff_start, m.falloff_end = rs * length, rf * length
+                fibres = reader.get(table, base, "fibres", str, "fan")
+                if fibres not in ("fan", "parallel"):
+                    raise reader.error(base, "fibres", f"expected 'fan' or 'parallel', got {fibres!r}")
+                if fibres == "parallel" and not (omega < 90 and rf > 1):
+                    raise reader.error(base, "fibres", "a sheet of parallel fibres needs zone_angle_deg under 90 "
+                                       "and falloff_end past the insertion (over 1)")
             else:
                 m.centre = reader.point(table, base, "centre", side)
                 sx = reader.get(table, base, "semi_x", float)
