@@ -63,10 +63,16 @@ def test_each_bad_row_is_one_line_naming_the_line_and_the_reason(tmp_path):
     ("clip,txt\na,hi\n", "unknown column 'txt' (did you mean: text"),
     ("clip,emotion\na,anger\n", "'transcript' or 'text' column"),
     ("clip,text\n", "no rows"),
+    ("clip,text\na,hi\nb,set red,EXTRA\n", "3 cells for the header's 2 columns (extra: 'EXTRA'; a value with a comma"),
 ])
 def test_an_unusable_manifest_is_refused_whole(tmp_path, text, message):
     with pytest.raises(InputError, match=message.replace("(", r"\(")):
         read_manifest(_manifest(tmp_path, text))
+
+
+def test_empty_trailing_cells_are_not_extra(tmp_path):
+    jobs = read_manifest(_manifest(tmp_path, "clip,text\na,hi,,\n"))
+    assert [(j.clip, j.text) for j in jobs] == [("a", "hi")]
 
 
 def test_defaults_refuse_unknown_settings():

@@ -250,8 +250,15 @@ def _rows(path: Path) -> list[tuple[int, dict]]:
                                      + ", ".join(COLUMNS), path, 1)
             if "transcript" not in head and "text" not in head:
                 raise InputError("the manifest needs a 'transcript' or 'text' column", path, 1)
-            rows = [(reader.line_num, {k: (v.strip() if isinstance(v, str) else v) for k, v in r.items()
-                                       if k is not None}) for r in reader]
+            rows = []
+            for r in reader:
+                extra = [v for v in r.get(None) or () if v.strip()]
+                if extra:                   # more cells than the header names (empty trailing ones are fine)
+                    raise InputError(f"{len(head) + len(r[None])} cells for the header's {len(head)} columns "
+                                     f"(extra: {', '.join(map(repr, extra))}; a value with a comma needs quotes)",
+                                     path, reader.line_num)
+                rows.append((reader.line_num, {k: (v.strip() if isinstance(v, str) else v) for k, v in r.items()
+                                               if k is not None}))
     except (UnicodeDecodeError, csv.Error) as e:
         raise InputError(f"not a CSV manifest ({e})", path) from None
     rows = [(n, r) for n, r in rows if any(r.values())]

@@ -89,6 +89,12 @@ def run(args) -> int:
         raise InputError(f"--skin colours the embedded face, not {mesh}")
     if args.landmarks and not mesh:
         raise InputError("--landmarks needs --mesh or --face")
+    if args.resolution is not None and not 800 <= args.resolution <= 200_000:
+        raise InputError(f"--resolution must be a vertex count from 800 to 200000, got {args.resolution}")
+    if not 0.0 <= args.rest_gap <= 0.01:
+        raise InputError(f"--rest-gap must be from 0 to 0.01 (metres: 0.002 is 2 mm), got {args.rest_gap:g}")
+    if args.camera_json and Path(args.camera_json).suffix.lower() != ".json":
+        raise InputError("the camera file must be a .json file", args.camera_json)
     if args.identity is not None and not args.face:
         raise InputError("--identity needs --face ict")
     from visemeface.render.renderer import parse_size

@@ -36,9 +36,12 @@ tissue stiffens without bound toward a stretch of 2.8 (Gent), so a strong glue
 face's own mesh, a brittle film that parts in one frame, a neo-Hookean tissue
 that never stiffens (under that glue the lips stretch 7x and hold).
 
-Writes OUTPUT (MP4) and OUTPUT's stem + .saliva.csv (--csv; per frame: time,
-jaw, broken fraction of the film along the seam, number and span of openings
-along the seam, centre gap, largest stretch). The state is saved after every
+Writes OUTPUT (MP4) and OUTPUT's stem + .saliva.csv (or --measures CSV), per
+frame: frame, time, jaw, broken_fraction (of the saliva film along the seam),
+open_count, open_span and open_fraction (openings between the lips along the
+seam), centre_gap (m), max_stretch (the saliva film's largest stretch: a strand
+stretches many times before it snaps), film_open_count and film_open_span (the
+film's own broken runs). The state is saved after every
 frame in OUTPUT.checkpoint/, removed when the run completes or diverges. Glue profiles:
 WHERE=VALUE items over --glue, WHERE one of centre (the mouth's central twelfth),
 left, right, corners, all or a range a..b of the position across the mouth

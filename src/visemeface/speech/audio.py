@@ -227,7 +227,9 @@ def media_wav(path, folder) -> Path:
     """A WAV of a recording for muxing: ``path`` itself for a sound file, else its track in ``folder``.
 
     A video handed to the muxer as "audio" would offer ffmpeg a second video
-    stream; its sound is written to ``folder/<stem>.wav`` (16-bit PCM) instead.
+    stream; its sound is written to ``folder/<stem>.wav`` instead, as 32-bit float: the samples decoded
+    exactly, so what is analysed of it (the articulation, the gestures) is what ``--audio`` with the same
+    video gives (16-bit PCM rounded the channels' mean and moved the jaw by up to 0.005).
     """
     import soundfile as sf
 
@@ -236,5 +238,5 @@ def media_wav(path, folder) -> Path:
         return path
     samples, rate = read_audio(path)
     out = Path(folder) / (path.stem + ".wav")
-    sf.write(str(out), samples, rate, subtype="PCM_16")
+    sf.write(str(out), samples.astype(np.float32), rate, subtype="FLOAT")
     return out
